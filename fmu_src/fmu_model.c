@@ -1,0 +1,423 @@
+/*
+ * fmu_model.c -- FMI-version-independent part of the FMU: parameters,
+ * state machine, planning, stepping, logging, FMU state.
+ */
+#define DJL_VARS_TABLES
+#include "fmu_model.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+static const char *state_name(int s)
+{
+    switch (s) {
+    case MS_START_END: return "StartAndEnd";
+    case MS_INSTANTIATED: return "Instantiated";
+    case MS_INIT: return "InitializationMode";
+    case MS_STEP: return "StepMode";
+    case MS_TERMINATED: return "Terminated";
+    case MS_ERROR: return "Error";
+    }
+    return "?";
+}
+
+static const char *status_category(model_status s)
+{
+    if (s >= ST_ERROR) return djl_log_category_names[DJL_LOG_LOGSTATUSERROR];
+    if (s == ST_WARNING) return djl_log_category_names[DJL_LOG_LOGSTATUSWARNING];
+    return djl_log_category_names[DJL_LOG_LOGEVENTS];
+}
+
+static void vlog(const model_instance *m, model_status status, int category, const char *fmt,
+                 va_list ap)
+{
+    char buf[1024];
+    if (!m->logger) return;
+    if (status < ST_ERROR) {
+        if (!m->logging_on) return;
+        if (category >= 0 && category < DJL_LOG_N && !m->category_on[category]) return;
+    }
+    vsnprintf(buf, sizeof buf, fmt, ap);
+    m->logger(m->logger_env, status,
+              category >= 0 && category < DJL_LOG_N ? djl_log_category_names[category]
+                                                    : status_category(status),
+              buf);
+}
+
+void model_log(const model_instance *m, model_status status, int category, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vlog(m, status, category, fmt, ap);
+    va_end(ap);
+}
+
+model_status model_fail(model_instance *m, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vlog(m, ST_ERROR, DJL_LOG_LOGSTATUSERROR, fmt, ap);
+    va_end(ap);
+    m->d.state = MS_ERROR;
+    return ST_ERROR;
+}
+
+int model_allowed(model_instance *m, const char *fn, int mask)
+{
+    if (m->d.state & mask) return 1;
+    model_fail(m, "%s must not be called in state %s", fn, state_name(m->d.state));
+    return 0;
+}
+
+static void defaults(model_data *d)
+{
+    memset(d, 0, sizeof(*d));
+    d->magic = MODEL_MAGIC;
+    d->layout = MODEL_LAYOUT;
+    d->size = (uint32_t)sizeof(model_data);
+    strncpy(d->token, DJL_INSTANTIATION_TOKEN, sizeof(d->token) - 1);
+    djl_params_default(&d->p);
+    d->t_start = 0.0;
+    d->start_time = 0.0;
+    d->state = MS_INSTANTIATED;
+}
+
+void model_init(model_instance *m, int fmi_version, const char *instance_name,
+                model_logger logger, void *logger_env, int logging_on)
+{
+    int i;
+    memset(m, 0, sizeof(*m));
+    defaults(&m->d);
+    m->fmi_version = fmi_version;
+    strncpy(m->instance_name, instance_name ? instance_name : "", sizeof(m->instance_name) - 1);
+    m->logger = logger;
+    m->logger_env = logger_env;
+    m->logging_on = logging_on;
+    for (i = 0; i < DJL_LOG_N; i++) m->category_on[i] = 1;
+}
+
+void model_reset(model_instance *m) { defaults(&m->d); }
+
+model_status model_set_debug_logging(model_instance *m, int logging_on, size_t n,
+                                     const char *const categories[])
+{
+    size_t i;
+    int c;
+    m->logging_on = logging_on;
+    if (n == 0) {
+        for (c = 0; c < DJL_LOG_N; c++) m->category_on[c] = logging_on;
+        return ST_OK;
+    }
+    for (c = 0; c < DJL_LOG_N; c++) m->category_on[c] = 0;
+    for (i = 0; i < n; i++) {
+        int found = 0;
+        for (c = 0; c < DJL_LOG_N; c++) {
+            if (categories[i] && strcmp(categories[i], djl_log_category_names[c]) == 0) {
+                m->category_on[c] = logging_on;
+                found = 1;
+            }
+        }
+        if (!found) {
+            model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
+                      "SetDebugLogging: unknown log category \"%s\"",
+                      categories[i] ? categories[i] : "(null)");
+            return ST_WARNING;
+        }
+    }
+    return ST_OK;
+}
+
+/* ------------------------------------------------------------------------ */
+/* variables                                                                */
+
+int model_lookup(unsigned int vr, int fmi3, model_var *out)
+{
+    int i;
+    for (i = 0; i < DJL_N_VARS; i++) {
+        const djl_var_info *v = &djl_var_table[i];
+        unsigned int span = fmi3 ? 1u : v->size;
+        if (vr >= v->vr && vr < v->vr + span) {
+            out->base = v->vr;
+            out->index = vr - v->vr;
+            out->type = v->type;
+            out->causality = v->causality;
+            out->size = v->size;
+            out->name = v->name;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+static const char *type_name(char t)
+{
+    return t == 'R' ? "Real" : t == 'I' ? "Integer" : t == 'B' ? "Boolean" : "?";
+}
+
+static double *real_param(model_data *d, unsigned int base, unsigned int index)
+{
+    switch (base) {
+    case VR_TE: return &d->p.Te;
+    case VR_T_START: return &d->t_start;
+    case VR_X0: return &d->p.x0;
+    case VR_DISTANCE: return &d->p.distance;
+    case VR_V_MAX: return &d->p.v_max;
+    case VR_A_MAX: return &d->p.a_max;
+    case VR_D_MAX: return &d->p.d_max;
+    case VR_T_F1: return &d->p.T_F[0];
+    case VR_T_F2: return &d->p.T_F[1];
+    case VR_T_F3: return &d->p.T_F[2];
+    case VR_T_F4: return &d->p.T_F[3];
+    case VR_V0: return &d->p.v0;
+    case VR_V_E: return &d->p.v_e;
+    case VR_SEG_DISTANCE: return &d->p.seg_distance[index];
+    case VR_SEG_V_END: return &d->p.seg_v_end[index];
+    default: return NULL;
+    }
+}
+
+static int32_t *int_param(model_data *d, unsigned int base)
+{
+    switch (base) {
+    case VR_PROFILE: return &d->p.profile;
+    case VR_SHORT_STAGE: return &d->p.short_stage;
+    case VR_N_SEGMENTS: return &d->p.n_segments;
+    default: return NULL;
+    }
+}
+
+static void evaluate(model_data *d)
+{
+    double u = (double)d->n - d->offset;
+    djl_eval(&d->plan, u, &d->cursor, &d->out);
+}
+
+static void log_plan(const model_instance *m)
+{
+    const djl_plan *pl = &m->d.plan;
+    static const char *const pname[] = {"", "AL", "JL", "DJL"};
+    int i;
+    model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
+              "planned %s move: %d segment(s), %.17g m in %.17g s (%lld samples of Te = %g s), "
+              "v_reached = %.17g m/s, a_reached = %.17g m/s2, d_reached = %.17g m/s2, "
+              "jerk times %d/%d/%d/%d samples",
+              pname[pl->p.profile], (int)pl->n_segments, pl->x_target, djl_motion_time(pl),
+              (long long)pl->k_end, pl->p.Te, pl->v_reached, pl->a_reached, pl->d_reached,
+              (int)pl->N[0], (int)pl->N[1], (int)pl->N[2], (int)pl->N[3]);
+    for (i = 0; i < 4; i++) {
+        int used = pl->p.profile == DJL_PROFILE_DJL || (pl->p.profile == DJL_PROFILE_JL && i == 0);
+        double T = pl->p.T_F[i], Ta = djl_applied_jerk_time(pl, i);
+        if (used && fabs(T - Ta) > 1e-9 * T)
+            model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
+                      "T_F%d = %.17g s is not a whole number of samples of Te = %g s: the jerk "
+                      "time applied is %d samples = %.17g s",
+                      i + 1, T, pl->p.Te, (int)pl->N[i], Ta);
+    }
+    for (i = 0; i < pl->n_segments; i++) {
+        const djl_segment_plan *s = &pl->seg[i];
+        model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
+                  "segment %d: start sample %lld, lead %lld, acceleration stage %lld samples at "
+                  "%.17g m/s2, cruise %lld samples at %.17g m/s, deceleration stage %lld samples at "
+                  "%.17g m/s2, filters %d/%d/%d/%d samples, rule %d",
+                  i + 1, (long long)s->start, (long long)s->lead, (long long)s->n1, s->a_level,
+                  (long long)s->k, s->v_peak, (long long)s->m, s->d_level, (int)s->N[0],
+                  (int)s->N[1], (int)s->N[2], (int)s->N[3], (int)s->branch);
+        if (s->merged_acc || s->merged_dec)
+            model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
+                      "segment %d: %s stage too short for two jerk times (short_stage = 2, the "
+                      "paper's rule): one jerk time used for it (%s)", i + 1,
+                      s->merged_acc && s->merged_dec ? "acceleration and deceleration"
+                      : s->merged_acc ? "acceleration" : "deceleration",
+                      s->merged_acc && s->merged_dec ? "T_F2 := T_F1, T_F4 := T_F3"
+                      : s->merged_acc ? "T_F2 := T_F1" : "T_F4 := T_F3");
+        if (s->branch >= 2 && s->branch <= 5)
+            model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
+                      "segment %d: no time-optimal profile lands exactly on a sample; landed with "
+                      "%s", i + 1,
+                      s->branch == 2 ? "two stages in the same direction"
+                      : s->branch == 3 ? "a small velocity dip"
+                      : s->branch == 4 ? "the cruise rounded to the nearest sample (another "
+                                         "segment takes up the difference)"
+                                       : "a stage ending between two samples");
+    }
+}
+
+/* Plan for the current parameters if needed; on failure log and go to Error. */
+static model_status ensure_plan(model_instance *m, const char *fn)
+{
+    djl_error err;
+    djl_status st;
+    double off;
+    model_data *d = &m->d;
+    if (d->planned) return ST_OK;
+    if (!isfinite(d->t_start))
+        return model_fail(m, "%s: invalid parameter t_start = %g s: must be finite", fn,
+                          d->t_start);
+    st = djl_plan_motion(&d->p, &d->plan, &err);
+    if (st != DJL_OK)
+        return model_fail(m, "%s: %s: %s", fn, djl_status_name(st), err.message);
+    off = (d->t_start - d->start_time) / d->p.Te;
+    if (!isfinite(off) || fabs(off) > 1e15)
+        return model_fail(m, "%s: t_start = %g s is %g samples of Te = %g s away from the start "
+                          "time %g s: too far", fn, d->t_start, off, d->p.Te, d->start_time);
+    if (fabs(off - floor(off + 0.5)) <= 1e-9 * (1.0 + fabs(off))) off = floor(off + 0.5);
+    d->offset = off;
+    d->cursor = 0;
+    d->planned = 1;
+    evaluate(d);
+    log_plan(m);
+    return ST_OK;
+}
+
+model_status model_set(model_instance *m, unsigned int vr, char type, double value)
+{
+    model_var v;
+    model_data *d = &m->d;
+    if (!model_lookup(vr, 0, &v))
+        return model_fail(m, "set: unknown value reference %u", vr);
+    if (v.type != type)
+        return model_fail(m, "set: %s (value reference %u) is a %s, not a %s", v.name, vr,
+                          type_name(v.type), type_name(type));
+    if (v.causality != 'p')
+        return model_fail(m, "set: %s (value reference %u) is %s: it cannot be set", v.name, vr,
+                          v.causality == 'o'   ? "an output"
+                          : v.causality == 't' ? "the independent variable"
+                                               : "a calculated parameter");
+    if (!(d->state & (MS_INSTANTIATED | MS_INIT)))
+        return model_fail(m, "set: %s is a fixed parameter: it can be set only before the end of "
+                          "initialization (state is %s)", v.name, state_name(d->state));
+    if (type == 'R') {
+        double *p = real_param(d, v.base, v.index);
+        if (!p) return model_fail(m, "set: internal error, no storage for %s", v.name);
+        *p = value;
+    } else if (type == 'I') {
+        int32_t *p = int_param(d, v.base);
+        if (!p) return model_fail(m, "set: internal error, no storage for %s", v.name);
+        *p = (int32_t)value;
+    }
+    d->planned = 0;
+    return ST_OK;
+}
+
+model_status model_get(model_instance *m, unsigned int vr, char type, double *value)
+{
+    model_var v;
+    model_data *d = &m->d;
+    if (!model_lookup(vr, 0, &v))
+        return model_fail(m, "get: unknown value reference %u", vr);
+    if (v.type != type)
+        return model_fail(m, "get: %s (value reference %u) is a %s, not a %s", v.name, vr,
+                          type_name(v.type), type_name(type));
+    if (v.causality == 't') {
+        *value = d->start_time + (double)d->n * d->p.Te;
+        return ST_OK;
+    }
+    if (v.causality == 'p') {
+        if (type == 'R') {
+            *value = *real_param(d, v.base, v.index);
+        } else {
+            *value = (double)*int_param(d, v.base);
+        }
+        return ST_OK;
+    }
+    if (d->state == MS_ERROR && !d->planned) {
+        *value = 0.0;
+        return ST_OK; /* diagnostics only */
+    }
+    if (ensure_plan(m, "get") != ST_OK) return ST_ERROR;
+    switch (v.base) {
+    case VR_X: *value = d->out.x; break;
+    case VR_V: *value = d->out.v; break;
+    case VR_A: *value = d->out.a; break;
+    case VR_J: *value = d->out.j; break;
+    case VR_DONE: *value = d->out.done ? 1.0 : 0.0; break;
+    case VR_X_AL: *value = d->out.x_al; break;
+    case VR_V_AL: *value = d->out.v_al; break;
+    case VR_A_AL: *value = d->out.a_al; break;
+    case VR_SEGMENT: *value = (double)d->out.segment; break;
+    case VR_MOTION_TIME: *value = djl_motion_time(&d->plan); break;
+    case VR_N_F1: *value = (double)d->plan.N[0]; break;
+    case VR_N_F2: *value = (double)d->plan.N[1]; break;
+    case VR_N_F3: *value = (double)d->plan.N[2]; break;
+    case VR_N_F4: *value = (double)d->plan.N[3]; break;
+    case VR_V_REACHED: *value = d->plan.v_reached; break;
+    case VR_A_REACHED: *value = d->plan.a_reached; break;
+    case VR_D_REACHED: *value = d->plan.d_reached; break;
+    default: return model_fail(m, "get: internal error, no value for %s", v.name);
+    }
+    return ST_OK;
+}
+
+/* ------------------------------------------------------------------------ */
+/* state machine                                                            */
+
+model_status model_setup(model_instance *m, double start_time)
+{
+    if (!isfinite(start_time))
+        return model_fail(m, "start time %g s: must be finite", start_time);
+    m->d.start_time = start_time;
+    m->d.planned = 0;
+    return ST_OK;
+}
+
+model_status model_enter_init(model_instance *m)
+{
+    m->d.state = MS_INIT;
+    return ST_OK;
+}
+
+model_status model_exit_init(model_instance *m)
+{
+    model_status st = ensure_plan(m, "ExitInitializationMode");
+    if (st != ST_OK) return st;
+    m->d.state = MS_STEP;
+    return ST_OK;
+}
+
+model_status model_do_step(model_instance *m, double t, double h)
+{
+    model_data *d = &m->d;
+    double now = d->start_time + (double)d->n * d->p.Te, r, k;
+    if (!(isfinite(h) && h > 0.0))
+        return model_fail(m, "DoStep: communication step %g s: must be a finite number > 0", h);
+    if (!(fabs(t - now) <= 1e-6 * d->p.Te + 1e-12 * fabs(now)))
+        return model_fail(m, "DoStep: currentCommunicationPoint = %.17g s, but the FMU is at "
+                          "%.17g s: a step must start where the previous one ended", t, now);
+    r = h / d->p.Te;
+    k = floor(r + 0.5);
+    if (k < 1.0 || fabs(r - k) > 1e-6 + 1e-12 * k)
+        return model_fail(m, "DoStep: communication step %.17g s is %.17g sampling periods of "
+                          "Te = %.17g s: it must be a whole multiple of Te (the generator "
+                          "produces one sample per Te)", h, r, d->p.Te);
+    if (k > 1e15 || (double)d->n + k > 1e15)
+        return model_fail(m, "DoStep: communication step %g s takes the FMU past 1e15 samples", h);
+    d->n += (int64_t)k;
+    evaluate(d);
+    return ST_OK;
+}
+
+model_status model_terminate(model_instance *m)
+{
+    m->d.state = MS_TERMINATED;
+    return ST_OK;
+}
+
+size_t model_state_size(void) { return sizeof(model_data); }
+
+model_status model_state_check(model_instance *m, const void *bytes, size_t size)
+{
+    model_data hdr;
+    if (!bytes) return model_fail(m, "FMU state: null pointer");
+    if (size != sizeof(model_data))
+        return model_fail(m, "FMU state: %lu bytes, expected %lu (made by another version of "
+                          "the FMU?)", (unsigned long)size, (unsigned long)sizeof(model_data));
+    memcpy(&hdr, bytes, offsetof(model_data, state));
+    if (hdr.magic != MODEL_MAGIC || hdr.layout != MODEL_LAYOUT || hdr.size != sizeof(model_data))
+        return model_fail(m, "FMU state: not a state of this FMU (bad header)");
+    if (strncmp(hdr.token, DJL_INSTANTIATION_TOKEN, sizeof(hdr.token)) != 0)
+        return model_fail(m, "FMU state: made by an FMU with instantiation token %.40s, this one "
+                          "is %s", hdr.token, DJL_INSTANTIATION_TOKEN);
+    return ST_OK;
+}

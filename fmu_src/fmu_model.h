@@ -1,0 +1,124 @@
+/*
+ * fmu_model.h -- the FMU instance, independent of the FMI version.
+ *
+ * fmi2.c and fmi3.c are thin wrappers that translate FMI calls into the
+ * functions below.  All the data of an instance that an FMU state must
+ * capture is in model_data: plain values, no pointers, so an FMU state is a
+ * copy of it and serialising it is a memcpy.
+ */
+#ifndef FMU_MODEL_H
+#define FMU_MODEL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "djl_core.h"
+#include "djl_vars.h"
+
+#if defined(__GNUC__) && __GNUC__ >= 4
+#pragma GCC visibility push(hidden)
+#endif
+
+/* States of the (co-simulation) state machine, as bit flags for masks. */
+typedef enum {
+    MS_START_END = 1 << 0,
+    MS_INSTANTIATED = 1 << 1,
+    MS_INIT = 1 << 2,
+    MS_STEP = 1 << 3,      /* FMI 2 stepComplete, FMI 3 Step Mode */
+    MS_TERMINATED = 1 << 4,
+    MS_ERROR = 1 << 5      /* after an error: only get (diagnostics), reset and free */
+} model_state;
+
+/* Same numbering as fmi2Status and fmi3Status. */
+typedef enum { ST_OK = 0, ST_WARNING = 1, ST_DISCARD = 2, ST_ERROR = 3, ST_FATAL = 4 } model_status;
+
+#define MODEL_MAGIC 0x4a4c4446u /* "FDLJ" */
+#define MODEL_LAYOUT 1u
+
+typedef struct {
+    uint32_t magic;
+    uint32_t layout;
+    uint32_t size;          /* sizeof(model_data), checked on deserialisation */
+    char token[48];         /* instantiation token of the FMU that made the state */
+    int32_t state;          /* model_state */
+    djl_params p;
+    double t_start;         /* s */
+    double start_time;      /* s, FMU start time */
+    int64_t n;              /* whole samples of Te since start_time */
+    double offset;          /* (t_start - start_time)/Te, made integral when within 1e-9 */
+    int32_t planned;        /* plan matches the parameters */
+    int32_t cursor;
+    djl_plan plan;
+    djl_sample out;         /* outputs at the current time */
+} model_data;
+
+typedef void (*model_logger)(void *env, model_status status, const char *category,
+                             const char *message);
+
+typedef struct {
+    model_data d;
+    /* environment: not part of an FMU state */
+    int fmi_version;
+    char instance_name[128];
+    model_logger logger;
+    void *logger_env;
+    int logging_on;
+    int category_on[DJL_LOG_N];
+} model_instance;
+
+/* Initialise an instance (default parameters, state Instantiated). */
+void model_init(model_instance *m, int fmi_version, const char *instance_name,
+                model_logger logger, void *logger_env, int logging_on);
+void model_reset(model_instance *m);
+
+/* Log through the importer's callback: errors always, warnings and events
+ * only when their category is on. */
+void model_log(const model_instance *m, model_status status, int category, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
+
+/* The call is allowed in the current state (mask of model_state), else log and
+ * return 0.  An error moves the instance to MS_ERROR. */
+int model_allowed(model_instance *m, const char *fn, int mask);
+model_status model_fail(model_instance *m, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+model_status model_set_debug_logging(model_instance *m, int logging_on, size_t n,
+                                     const char *const categories[]);
+
+/* Variable access.  vr is an element value reference (FMI 2 style: arrays at
+ * base + i); type is 'R', 'I' or 'B'. */
+typedef struct {
+    unsigned int base;  /* value reference of the variable (array base) */
+    unsigned int index; /* element */
+    char type, causality;
+    unsigned short size;
+    const char *name;
+} model_var;
+/* Look a value reference up; fmi3 = 1 accepts only declared (array base)
+ * references.  Returns 0 if unknown. */
+int model_lookup(unsigned int vr, int fmi3, model_var *out);
+
+model_status model_set(model_instance *m, unsigned int vr, char type, double value);
+model_status model_get(model_instance *m, unsigned int vr, char type, double *value);
+
+model_status model_setup(model_instance *m, double start_time);
+model_status model_enter_init(model_instance *m);
+model_status model_exit_init(model_instance *m);
+model_status model_do_step(model_instance *m, double t, double h);
+model_status model_terminate(model_instance *m);
+
+/* FMU state: bytes of model_data. */
+size_t model_state_size(void);
+model_status model_state_check(model_instance *m, const void *bytes, size_t size);
+
+#if defined(__GNUC__) && __GNUC__ >= 4
+#pragma GCC visibility pop
+#endif
+
+#endif /* FMU_MODEL_H */

@@ -1,0 +1,1 @@
+"""Subcommands of ``djl-fmu`` (one module each, with ``register(subparsers)``)."""

@@ -1,0 +1,459 @@
+"""Step the generator FMU from Python (fmpy), FMI 2.0 or 3.0 alike.
+
+:class:`GeneratorFMU` is one instance stepped by hand (for co-simulation
+masters); :func:`generate` runs a whole motion and returns a
+:class:`Trajectory`.
+
+Examples
+--------
+>>> from harness.fmu.runner import generate
+>>> traj = generate({"profile": 2, "distance": 0.3, "T_F1": 0.05})  # doctest: +SKIP
+>>> traj.x[-1]                                                      # doctest: +SKIP
+0.3
+"""
+
+from __future__ import annotations
+
+import ctypes
+import shutil
+import tempfile
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import spec
+
+REAL_OUTPUTS = ("x", "v", "a", "j", "x_AL", "v_AL", "a_AL")
+"""Real outputs recorded by :func:`generate`, in this order."""
+
+ParamValue = float | int | bool | Sequence[float]
+
+
+@dataclass
+class LogRecord:
+    """One message logged by the FMU."""
+
+    status: int
+    category: str
+    message: str
+
+    def __str__(self) -> str:
+        label = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"][self.status]
+        return f"[{label}] {self.category}: {self.message}"
+
+
+class GeneratorFMU:
+    """One instance of the generator FMU, stepped through fmpy.
+
+    Parameters
+    ----------
+    fmu : path-like, optional
+        An ``.fmu`` file with the generator's variables; by default the FMU
+        built from this package's sources (cached, see
+        :func:`harness.fmu.build.default_fmu`).
+    fmi_version : {2, 3}
+        Which FMU to build when ``fmu`` is not given.
+    params : mapping, optional
+        Parameter values by FMU variable name (``seg_distance`` and
+        ``seg_v_end`` take sequences).
+    start_time : float
+        FMU start time (s).
+    instance_name : str
+        Instance name passed to the FMU (appears in its log messages).
+    debug_logging : bool
+        Ask the FMU for event and warning messages too (errors always come).
+    echo : bool
+        Print log messages as they come (they are also kept in :attr:`log`).
+
+    Notes
+    -----
+    The FMU is unzipped once per instance into a temporary directory that
+    :meth:`close` removes.  Use it as a context manager.
+    """
+
+    def __init__(
+        self,
+        fmu: str | Path | None = None,
+        *,
+        fmi_version: int = 2,
+        params: Mapping[str, ParamValue] | None = None,
+        start_time: float = 0.0,
+        instance_name: str = "generator",
+        debug_logging: bool = False,
+        echo: bool = False,
+    ) -> None:
+        from fmpy import extract, read_model_description
+
+        if fmu is None:
+            from .build import default_fmu
+
+            fmu = default_fmu(fmi_version)
+        self.path = Path(fmu)
+        self.md = read_model_description(str(self.path))
+        self.fmi_version = 3 if self.md.fmiVersion.startswith("3") else 2
+        self.log: list[LogRecord] = []
+        self._echo = echo
+        self._tmp = tempfile.mkdtemp(prefix="djl-fmu-")
+        self._unzipped = extract(str(self.path), unzipdir=self._tmp)
+        self._vars = {v.name: v for v in self.md.modelVariables}
+        missing = [n for n in ("x", "v", "a", "j", "done", "Te", "profile") if n not in self._vars]
+        if missing:
+            raise ValueError(f"{self.path}: not a generator FMU, variables missing: {missing}")
+        self.time = float(start_time)
+        self._closed = False
+        self._instantiate(instance_name, debug_logging)
+        self.instance_name = instance_name
+        self._initialized = False
+        self.start_time = float(start_time)
+        self._setup(start_time)
+        if params:
+            self.set(params)
+
+    # ------------------------------------------------------------- plumbing
+
+    def _record(self, status: int, category: bytes | None, message: bytes | None) -> None:
+        rec = LogRecord(int(status), (category or b"").decode("utf-8", "replace"),
+                        (message or b"").decode("utf-8", "replace"))
+        self.log.append(rec)
+        if self._echo:
+            print(f"{self.path.name}: {rec}")
+
+    def _instantiate(self, name: str, debug_logging: bool) -> None:
+        cs = self.md.coSimulation
+        if cs is None:
+            raise ValueError(f"{self.path}: not a co-simulation FMU")
+        if self.fmi_version == 2:
+            from fmpy.fmi2 import (
+                FMU2Slave,
+                fmi2CallbackAllocateMemoryTYPE,
+                fmi2CallbackFreeMemoryTYPE,
+                fmi2CallbackFunctions,
+                fmi2CallbackLoggerTYPE,
+            )
+            from fmpy import calloc, free
+
+            self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self._unzipped,
+                                 modelIdentifier=cs.modelIdentifier, instanceName=name)
+            cb = fmi2CallbackFunctions()
+
+            def logger(env, instance, status, category, message):  # noqa: ARG001
+                self._record(status, category, message)
+
+            cb.logger = fmi2CallbackLoggerTYPE(logger)
+            cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+            cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+            self._callbacks = cb  # keep alive
+            self.fmu.instantiate(callbacks=cb, loggingOn=debug_logging)
+        else:
+            from fmpy.fmi3 import FMU3Slave
+
+            self.fmu = FMU3Slave(guid=self.md.guid, unzipDirectory=self._unzipped,
+                                 modelIdentifier=cs.modelIdentifier, instanceName=name)
+
+            def log_message(env, status, category, message):  # noqa: ARG001
+                self._record(status, category, message)
+
+            self._log_message = log_message
+            self.fmu.instantiate(loggingOn=debug_logging, logMessage=log_message)
+
+    def _setup(self, start_time: float) -> None:
+        self._start = start_time
+        if self.fmi_version == 2:
+            self.fmu.setupExperiment(startTime=start_time)
+
+    def variable(self, name: str) -> Any:
+        """fmpy's description of the variable ``name``."""
+        try:
+            return self._vars[name]
+        except KeyError:
+            raise KeyError(f"{self.path.name} has no variable {name!r}") from None
+
+    # ------------------------------------------------------------ values
+
+    def _elements(self, name: str) -> list[Any]:
+        """FMI 2: the scalar variables of ``name`` (arrays are unrolled)."""
+        if name in self._vars:
+            return [self._vars[name]]
+        els = [v for n, v in self._vars.items() if n.startswith(name + "[")]
+        if not els:
+            raise KeyError(f"{self.path.name} has no variable {name!r}")
+        return sorted(els, key=lambda v: v.valueReference)
+
+    def set(self, params: Mapping[str, ParamValue]) -> None:
+        """Set parameters by name (before :meth:`initialize`)."""
+        for name, value in params.items():
+            if self.fmi_version == 3:
+                var = self.variable(name)
+                vals = list(np.atleast_1d(value)) if var.dimensions else [value]
+                if var.dimensions:
+                    size = int(var.dimensions[0].start)
+                    vals = (vals + [0.0] * size)[:size]
+                vr = [var.valueReference]
+                if var.type == "Float64":
+                    self.fmu.setFloat64(vr, [float(x) for x in vals])
+                elif var.type == "Int32":
+                    self.fmu.setInt32(vr, [int(x) for x in vals])
+                elif var.type == "Boolean":
+                    self.fmu.setBoolean(vr, [bool(x) for x in vals])
+                else:
+                    raise TypeError(f"{name}: unsupported type {var.type}")
+            else:
+                els = self._elements(name)
+                vals = list(np.atleast_1d(value)) if len(els) > 1 else [value]
+                if len(els) > 1:
+                    vals = (vals + [0.0] * len(els))[: len(els)]
+                vrs = [e.valueReference for e in els]
+                typ = els[0].type
+                if typ == "Real":
+                    self.fmu.setReal(vrs, [float(x) for x in vals])
+                elif typ == "Integer":
+                    self.fmu.setInteger(vrs, [int(x) for x in vals])
+                elif typ == "Boolean":
+                    self.fmu.setBoolean(vrs, [bool(x) for x in vals])
+                else:
+                    raise TypeError(f"{name}: unsupported type {typ}")
+
+    def get(self, name: str) -> Any:
+        """Value of one variable (arrays come back as numpy arrays)."""
+        if self.fmi_version == 3:
+            var = self.variable(name)
+            vr = [var.valueReference]
+            n = int(var.dimensions[0].start) if var.dimensions else 1
+            if var.type == "Float64":
+                vals = self.fmu.getFloat64(vr, n)
+            elif var.type == "Int32":
+                vals = self.fmu.getInt32(vr, n)
+            else:
+                vals = self.fmu.getBoolean(vr, n)
+            return np.array(vals) if var.dimensions else vals[0]
+        els = self._elements(name)
+        vrs = [e.valueReference for e in els]
+        typ = els[0].type
+        vals = (self.fmu.getReal(vrs) if typ == "Real" else
+                self.fmu.getInteger(vrs) if typ == "Integer" else self.fmu.getBoolean(vrs))
+        return np.array(vals) if len(els) > 1 else vals[0]
+
+    def vr(self, names: Iterable[str]) -> list[int]:
+        """Value references of scalar variables."""
+        return [self.variable(n).valueReference for n in names]
+
+    def get_reals(self, vrs: Sequence[int]) -> list[float]:
+        """Fast path: Real/Float64 scalars by value reference."""
+        return self.fmu.getFloat64(vrs) if self.fmi_version == 3 else self.fmu.getReal(vrs)
+
+    # --------------------------------------------------------- life cycle
+
+    def initialize(self) -> None:
+        """Enter and exit initialization mode (parameters are then fixed)."""
+        if self.fmi_version == 2:
+            self.fmu.enterInitializationMode()
+        else:
+            self.fmu.enterInitializationMode(startTime=self._start)
+        self.fmu.exitInitializationMode()
+        self._initialized = True
+
+    def do_step(self, h: float) -> None:
+        """Advance the FMU by ``h`` seconds (a whole multiple of ``Te``)."""
+        self.fmu.doStep(currentCommunicationPoint=self.time, communicationStepSize=h)
+        self.time += h
+
+    def get_state(self) -> Any:
+        """Opaque FMU state (free it with :meth:`free_state`)."""
+        return self.fmu.getFMUState() if self.fmi_version == 3 else self.fmu.getFMUstate()
+
+    def set_state(self, state: Any, time: float) -> None:
+        """Restore an FMU state taken at ``time``."""
+        if self.fmi_version == 3:
+            self.fmu.setFMUState(state)
+        else:
+            self.fmu.setFMUstate(state)
+        self.time = time
+
+    def free_state(self, state: Any) -> None:
+        """Release a state from :meth:`get_state`."""
+        if self.fmi_version == 3:
+            self.fmu.freeFMUState(state)
+        else:
+            self.fmu.freeFMUstate(state)
+
+    def serialize_state(self, state: Any) -> bytes:
+        """Bytes of a state."""
+        if self.fmi_version == 3:
+            return bytes(self.fmu.serializeFMUState(state))
+        return bytes(self.fmu.serializeFMUstate(state))
+
+    def deserialize_state(self, data: bytes) -> Any:
+        """State from :meth:`serialize_state` bytes."""
+        if self.fmi_version == 3:
+            return self.fmu.deserializeFMUState(bytearray(data))
+        return self.fmu.deserializeFMUstate(bytearray(data))
+
+    def close(self) -> None:
+        """Terminate (when stepping), free the instance, remove the unzipped FMU."""
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            if self._initialized:
+                try:
+                    self.fmu.terminate()
+                except Exception:  # noqa: BLE001 - already in error: still free it
+                    pass
+            self.fmu.freeInstance()
+        finally:
+            try:
+                from fmpy import freeLibrary
+
+                freeLibrary(ctypes.c_void_p(self.fmu.dll._handle))
+            except Exception:  # noqa: BLE001
+                pass
+            shutil.rmtree(self._tmp, ignore_errors=True)
+
+    def __enter__(self) -> GeneratorFMU:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+@dataclass
+class Trajectory:
+    """A generated motion, sampled at the communication points.
+
+    Attributes
+    ----------
+    t : ndarray
+        Time (s).
+    x, v, a, j : ndarray
+        Reference position (m), velocity (m/s), acceleration (m/s2), jerk (m/s3).
+    x_AL, v_AL, a_AL : ndarray
+        The acceleration-limited profile before the FIR filters.
+    done : ndarray of bool
+        True once the motion has ended.
+    segment : ndarray of int
+        1-based segment of the AL profile (0 before the start).
+    params : dict
+        The parameters given (FMU defaults for the others).
+    motion_time : float
+        Duration of the motion (s), filters included.
+    N_F : tuple of int
+        Jerk times applied, in samples.
+    log : list of LogRecord
+        What the FMU logged.
+    """
+
+    t: np.ndarray
+    x: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    j: np.ndarray
+    x_AL: np.ndarray
+    v_AL: np.ndarray
+    a_AL: np.ndarray
+    done: np.ndarray
+    segment: np.ndarray
+    params: dict[str, Any]
+    motion_time: float
+    N_F: tuple[int, int, int, int]
+    fmi_version: int
+    log: list[LogRecord] = field(default_factory=list)
+
+    @property
+    def t_end(self) -> float:
+        """Time at which the motion ends (s)."""
+        return float(self.params.get("t_start", 0.0)) + self.motion_time
+
+    def plot(self, *, al: bool = True, title: str | None = None):
+        """Plot x, v, a and j against time (the AL profile dashed); return the figure."""
+        import matplotlib.pyplot as plt
+
+        fig, axes = plt.subplots(4, 1, sharex=True, figsize=(8, 8))
+        rows = [("x", "x [m]", "x_AL"), ("v", "v [m/s]", "v_AL"), ("a", "a [m/s²]", "a_AL"),
+                ("j", "j [m/s³]", None)]
+        for ax, (name, label, al_name) in zip(axes, rows, strict=True):
+            kw = {"drawstyle": "steps-post"} if name == "j" else {}
+            ax.plot(self.t, getattr(self, name), label=name, **kw)
+            if al and al_name:
+                ax.plot(self.t, getattr(self, al_name), "--", lw=0.8, label=f"{name} (AL input)",
+                        drawstyle="steps-post" if al_name == "a_AL" else "default")
+            ax.set_ylabel(label)
+            ax.grid(True, alpha=0.3)
+        axes[0].legend(loc="lower right", fontsize="small")
+        axes[-1].set_xlabel("t [s]")
+        names = {1: "AL", 2: "JL", 3: "DJL"}
+        prof = names.get(int(self.params.get("profile", 3)), "?")
+        fig.suptitle(title or f"{prof} profile, motion time {self.motion_time:.4g} s")
+        fig.tight_layout()
+        return fig
+
+
+def generate(
+    params: Mapping[str, ParamValue] | None = None,
+    *,
+    t_stop: float | None = None,
+    dt: float | None = None,
+    fmi_version: int = 2,
+    fmu: str | Path | None = None,
+    start_time: float = 0.0,
+    debug_logging: bool = False,
+) -> Trajectory:
+    """Run one motion of the generator FMU and record its outputs.
+
+    Parameters
+    ----------
+    params : mapping, optional
+        Parameters by FMU variable name; the FMU's start values for the rest.
+    t_stop : float, optional
+        End time; by default the end of the motion plus 10 samples.
+    dt : float, optional
+        Communication step (a whole multiple of ``Te``); default ``Te``.
+    fmi_version : {2, 3}
+        FMU to use when ``fmu`` is not given.
+    fmu : path-like, optional
+        A generator FMU file.
+    start_time : float
+        FMU start time.
+    debug_logging : bool
+        Collect the FMU's event and warning messages in ``Trajectory.log``.
+
+    Returns
+    -------
+    Trajectory
+    """
+    params = dict(params or {})
+    with GeneratorFMU(fmu, fmi_version=fmi_version, params=params, start_time=start_time,
+                      debug_logging=debug_logging) as g:
+        g.initialize()
+        Te = float(g.get("Te"))
+        step = Te if dt is None else float(dt)
+        motion_time = float(g.get("motion_time"))
+        t_start = float(g.get("t_start"))
+        if t_stop is None:
+            t_stop = max(t_start, start_time) + motion_time + 10 * Te
+        n = int(round((t_stop - start_time) / step))
+        vrs = g.vr(REAL_OUTPUTS)
+        vr_done = g.variable("done").valueReference
+        vr_seg = g.variable("segment").valueReference
+        get_bool = g.fmu.getBoolean
+        get_int = g.fmu.getInt32 if g.fmi_version == 3 else g.fmu.getInteger
+        rows = np.empty((n + 1, len(REAL_OUTPUTS)))
+        done = np.empty(n + 1, dtype=bool)
+        seg = np.empty(n + 1, dtype=np.int32)
+        t = start_time + step * np.arange(n + 1)
+        for k in range(n + 1):
+            if k:
+                g.fmu.doStep(currentCommunicationPoint=t[k - 1], communicationStepSize=step)
+            rows[k] = g.get_reals(vrs)
+            done[k] = get_bool([vr_done])[0]
+            seg[k] = get_int([vr_seg])[0]
+        g.time = float(t[-1])
+        full = {v.name: g.get(v.name) for v in spec.PARAMETERS}
+        N_F = tuple(int(g.get(f"N_F{i}")) for i in range(1, 5))
+        log = list(g.log)
+    cols = {name: rows[:, i] for i, name in enumerate(REAL_OUTPUTS)}
+    return Trajectory(t=t, done=done, segment=seg, params=full, motion_time=motion_time,
+                      N_F=N_F, fmi_version=fmi_version if fmu is None else g.fmi_version,
+                      log=log, **cols)

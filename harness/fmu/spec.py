@@ -1,0 +1,169 @@
+"""The FMU's variables: the single source of truth.
+
+Both model descriptions (``modeldesc/fmi2``, ``modeldesc/fmi3``) and the C
+header of value references (``fmu_src/djl_vars.h``) are generated from
+:data:`VARIABLES` by :mod:`harness.fmu.codegen`; a test regenerates them and
+fails if the committed files differ.
+
+Names, units and meanings of the variables listed in issue #2 are a contract
+with users: extend the list, never rename.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import uuid
+from dataclasses import asdict, dataclass, field
+from typing import Literal
+
+MODEL_IDENTIFIER = "JerkLimitedTrajectory"
+MODEL_NAME = "JerkLimitedTrajectory"
+MODEL_VERSION = "0.1.0"
+MAX_SEGMENTS = 32
+"""Capacity of the segment arrays (``DJL_MAX_SEGMENTS`` in ``djl_core.h``)."""
+
+DEFAULT_TE = 1e-3
+"""Start value of ``Te``; also FMI 3 ``fixedInternalStepSize``."""
+
+LOG_CATEGORIES: tuple[tuple[str, str], ...] = (
+    ("logEvents", "Planning decisions: stage lengths, reached limits, fallbacks"),
+    ("logStatusWarning", "Warnings (ignored parameters)"),
+    ("logStatusError", "Errors: invalid parameters, infeasible motions, calls out of order"),
+)
+
+Causality = Literal["parameter", "calculatedParameter", "output", "local", "independent"]
+Variability = Literal["fixed", "tunable", "discrete", "continuous"]
+VarType = Literal["Real", "Integer", "Boolean"]
+
+UNITS: dict[str, dict[str, int]] = {
+    "s": {"s": 1},
+    "m": {"m": 1},
+    "m/s": {"m": 1, "s": -1},
+    "m/s2": {"m": 1, "s": -2},
+    "m/s3": {"m": 1, "s": -3},
+}
+
+
+@dataclass(frozen=True)
+class Variable:
+    """One FMU variable (a scalar, or an array of ``size`` elements)."""
+
+    name: str
+    vr: int
+    type: VarType
+    causality: Causality
+    variability: Variability
+    description: str
+    unit: str | None = None
+    start: float | int | bool | None = None
+    initial: Literal["exact", "calculated", "approx"] | None = None
+    size: int = 1
+    """Array length; FMI 2 gets scalars ``name[1]..name[size]`` with consecutive
+    value references, FMI 3 one array variable."""
+    c_name: str = field(default="")
+    """Enumerator stem in ``djl_vars.h`` (defaults to the upper-cased name)."""
+
+    @property
+    def enum(self) -> str:
+        """Name of the value-reference enumerator in C."""
+        return "VR_" + (self.c_name or self.name.upper())
+
+
+def _p(name, vr, typ, start, desc, unit=None, size=1, c_name=""):
+    return Variable(name, vr, typ, "parameter", "fixed", desc, unit, start, "exact", size, c_name)
+
+
+def _o(name, vr, typ, desc, unit=None, c_name="", variability="discrete"):
+    return Variable(name, vr, typ, "output", variability, desc, unit, None, "calculated", 1, c_name)
+
+
+def _c(name, vr, typ, desc, unit=None):
+    return Variable(name, vr, typ, "calculatedParameter", "fixed", desc, unit, None, "calculated")
+
+
+VARIABLES: tuple[Variable, ...] = (
+    Variable("time", 0, "Real", "independent", "continuous", "Simulation time", "s",
+             c_name="TIME"),
+    # --- parameters (issue #2 contract) ---------------------------------------
+    _p("profile", 1, "Integer", 3, "Profile: 1 = AL (acceleration-limited), 2 = JL (jerk-limited, "
+       "one jerk time T_F1), 3 = DJL (dissociated jerk-limited, jerk times T_F1..T_F4)"),
+    _p("Te", 2, "Real", DEFAULT_TE, "Sampling period of the generator; the communication step "
+       "must be a whole multiple of it", "s", c_name="TE"),
+    _p("t_start", 3, "Real", 0.0, "Time at which the motion starts", "s"),
+    _p("x0", 4, "Real", 0.0, "Start position", "m"),
+    _p("distance", 5, "Real", 0.4, "Signed length of a single-segment move (n_segments = 0)", "m"),
+    _p("v_max", 6, "Real", 1.0, "Velocity limit (magnitude)", "m/s"),
+    _p("a_max", 7, "Real", 10.0, "Acceleration limit (magnitude, speeding up)", "m/s2"),
+    _p("d_max", 8, "Real", 10.0, "Deceleration limit (magnitude, slowing down)", "m/s2"),
+    _p("T_F1", 9, "Real", 0.08, "Jerk time of stage 1 (start of acceleration); JL uses it for "
+       "all four stages", "s"),
+    _p("T_F2", 10, "Real", 0.08, "Jerk time of stage 2 (end of acceleration), DJL", "s"),
+    _p("T_F3", 11, "Real", 0.06, "Jerk time of stage 3 (start of deceleration), DJL", "s"),
+    _p("T_F4", 12, "Real", 0.05, "Jerk time of stage 4 (end of deceleration), DJL", "s"),
+    # --- outputs (issue #2 contract) ------------------------------------------
+    _o("x", 13, "Real", "Reference position", "m", variability="continuous"),
+    _o("v", 14, "Real", "Reference velocity", "m/s", variability="continuous"),
+    _o("a", 15, "Real", "Reference acceleration", "m/s2", variability="continuous"),
+    _o("j", 16, "Real", "Reference jerk over the sample interval that starts now (0 for AL)",
+       "m/s3"),
+    _o("done", 17, "Boolean", "True once the motion, filters included, has ended"),
+    # --- extensions -----------------------------------------------------------
+    _p("v0", 20, "Real", 0.0, "Start velocity (the axis moves at v0 before t_start)", "m/s"),
+    _p("v_e", 21, "Real", 0.0, "End velocity of a single-segment move (n_segments = 0)", "m/s"),
+    _p("short_stage", 22, "Integer", 1, "Acceleration/deceleration stage shorter than its jerk "
+       "times: 1 = stretch it so that every constant-jerk stage lasts its jerk time (lower "
+       "acceleration); 2 = let the two ramps overlap as in the paper (shorter stages, lower peak "
+       "acceleration; DJL merges a phase's jerk times when T_1 or T_3 would be negative)"),
+    _p("n_segments", 23, "Integer", 0, "0: single move given by distance and v_e; 1..32: "
+       "multi-segment move given by seg_distance[1..n] and seg_v_end[1..n]"),
+    _o("x_AL", 30, "Real", "Acceleration-limited profile before the FIR filters: position "
+       "(starts at x0)", "m", variability="continuous"),
+    _o("v_AL", 31, "Real", "Acceleration-limited profile before the FIR filters: velocity", "m/s",
+       variability="continuous"),
+    _o("a_AL", 32, "Real", "Acceleration-limited profile before the FIR filters: acceleration "
+       "over the sample interval that starts now", "m/s2"),
+    _o("segment", 33, "Integer", "1-based segment of the AL profile now; 0 before t_start"),
+    _c("motion_time", 40, "Real", "Duration of the motion, filters included (ends at "
+       "t_start + motion_time)", "s"),
+    _c("N_F1", 41, "Integer", "Jerk time of stage 1 in samples, round(T_F1/Te) (0 for AL)"),
+    _c("N_F2", 42, "Integer", "Jerk time of stage 2 in samples (JL: N_F1)"),
+    _c("N_F3", 43, "Integer", "Jerk time of stage 3 in samples (JL: N_F1)"),
+    _c("N_F4", 44, "Integer", "Jerk time of stage 4 in samples (JL: N_F1)"),
+    _c("v_reached", 45, "Real", "Largest peak velocity of the planned segments (magnitude)",
+       "m/s"),
+    _c("a_reached", 46, "Real", "Largest acceleration level of the planned stages (the "
+       "Appendix's recomputed a_max)", "m/s2"),
+    _c("d_reached", 47, "Real", "Largest deceleration level of the planned stages (the "
+       "Appendix's recomputed d_max)", "m/s2"),
+    _p("seg_distance", 100, "Real", 0.0, "Signed length of each segment", "m", size=MAX_SEGMENTS),
+    _p("seg_v_end", 200, "Real", 0.0, "Velocity at the end of each segment (the last one is the "
+       "end velocity of the motion)", "m/s", size=MAX_SEGMENTS),
+)
+
+PARAMETERS = tuple(v for v in VARIABLES if v.causality == "parameter")
+OUTPUTS = tuple(v for v in VARIABLES if v.causality == "output")
+CALCULATED = tuple(v for v in VARIABLES if v.causality == "calculatedParameter")
+BY_NAME = {v.name: v for v in VARIABLES}
+
+
+def fmi2_scalars(var: Variable) -> list[tuple[str, int]]:
+    """FMI 2 scalar names and value references of ``var`` (arrays are unrolled)."""
+    if var.size == 1:
+        return [(var.name, var.vr)]
+    return [(f"{var.name}[{i + 1}]", var.vr + i) for i in range(var.size)]
+
+
+def _fingerprint() -> str:
+    payload = json.dumps(
+        {"id": MODEL_IDENTIFIER, "version": MODEL_VERSION,
+         "vars": [asdict(v) for v in VARIABLES]},
+        sort_keys=True,
+    )
+    return hashlib.sha256(payload.encode()).hexdigest()
+
+
+INSTANTIATION_TOKEN = "{" + str(uuid.uuid5(uuid.NAMESPACE_URL, "djl-fmu:" + _fingerprint())) + "}"
+"""FMI 2 ``guid`` and FMI 3 ``instantiationToken``: derived from the variable
+list, so it changes whenever the interface does.  Written into the model
+descriptions and ``djl_vars.h`` by codegen: this is its only definition."""
