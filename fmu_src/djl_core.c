@@ -762,7 +762,9 @@ static int segment_absorb(work_t *w, int j, double r_real, int branch)
     sctx c = w->c[j];
     ssol s;
     if (w->empty[j]) return 0;
-    c.D = c.D + w->sigma[j] * r_real;
+    /* from the distance the segment was planned for: a rounded (pinned)
+     * segment already passed its own residual on */
+    c.D = w->s[j].D + w->sigma[j] * r_real;
     if (!(c.D > 0.0)) return 0;
     if (branch == 1 ? !solve_b1(&c, &s) : !solve_b23(&c, branch, &s)) return 0;
     w->c[j] = c;
@@ -1024,7 +1026,7 @@ djl_status djl_plan_motion(const djl_params *p, djl_plan *plan, djl_error *err)
             int32_t Na = s->hasA ? s->N1 : s->N3, Nb = s->hasA ? s->N2 : s->N4;
             int64_t t0 = S + s->g + (s->after ? 0 : s->k);
             int64_t nn = s->hasA ? s->n1 : s->m;
-            double vend = sg * w.vE[i];
+            double vend = w.vE[i];
             if (s->split == 0) {
                 add_step(&w, t0, sg * lv, Na, sg * lv, 0, 0.0, i + 1);
                 add_step(&w, t0 + nn, -sg * (lv - fl), Nb, sg * fl, fl == 0.0, vend, i + 1);
@@ -1042,7 +1044,7 @@ djl_status djl_plan_motion(const djl_params *p, djl_plan *plan, djl_error *err)
             if (s->hasD) {
                 int64_t t3 = S + s->g + (s->hasA ? s->n1 : 0) + s->k;
                 add_step(&w, t3, -sg * s->dl, s->N3, -sg * s->dl, 0, 0.0, i + 1);
-                add_step(&w, t3 + s->m, sg * s->dl, s->N4, 0.0, 1, sg * w.vE[i], i + 1);
+                add_step(&w, t3 + s->m, sg * s->dl, s->N4, 0.0, 1, w.vE[i], i + 1);
             }
         }
         if (fabs(s->vp) > plan->v_reached) plan->v_reached = fabs(s->vp);

@@ -258,11 +258,21 @@ static model_status ensure_plan(model_instance *m, const char *fn)
     st = djl_plan_motion(&d->p, &d->plan, &err);
     if (st != DJL_OK)
         return model_fail(m, "%s: %s: %s", fn, djl_status_name(st), err.message);
+    /* The generator samples at start_time + n Te: the motion starts at the
+     * first of those samples at or after t_start. */
     off = (d->t_start - d->start_time) / d->p.Te;
     if (!isfinite(off) || fabs(off) > 1e15)
         return model_fail(m, "%s: t_start = %g s is %g samples of Te = %g s away from the start "
                           "time %g s: too far", fn, d->t_start, off, d->p.Te, d->start_time);
-    if (fabs(off - floor(off + 0.5)) <= 1e-9 * (1.0 + fabs(off))) off = floor(off + 0.5);
+    if (fabs(off - floor(off + 0.5)) <= 1e-9 * (1.0 + fabs(off)))
+        off = floor(off + 0.5);
+    else {
+        off = ceil(off);
+        model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
+                  "t_start = %.17g s is not a sample of the generator (start time %.17g s + k Te, "
+                  "Te = %.17g s): the motion starts at the next sample, %.17g s", d->t_start,
+                  d->start_time, d->p.Te, d->start_time + off * d->p.Te);
+    }
     d->offset = off;
     d->cursor = 0;
     d->planned = 1;

@@ -28,7 +28,7 @@ Units are SI throughout (m, s, m/s, m/s2, m/s3, Hz).
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser with every available command."""
+    """Build the argument parser with every available command."""
     parser = argparse.ArgumentParser(
         prog="djl-fmu",
         description=(

@@ -1,0 +1,1 @@
+"""The generator FMU: variable list (spec), code generation, build, and the fmpy runner."""

@@ -62,7 +62,7 @@ def source_files(fmi_version: int) -> list[Path]:
 
 
 def model_description(fmi_version: int) -> Path:
-    """The committed ``modelDescription.xml`` for ``fmi_version``."""
+    """Return the committed ``modelDescription.xml`` for ``fmi_version``."""
     _check_version(fmi_version)
     return modeldesc_dir() / f"fmi{fmi_version}" / "modelDescription.xml"
 

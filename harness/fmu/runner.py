@@ -32,6 +32,28 @@ REAL_OUTPUTS = ("x", "v", "a", "j", "x_AL", "v_AL", "a_AL")
 ParamValue = float | int | bool | Sequence[float]
 
 
+class FMUError(RuntimeError):
+    """An FMI call returned an error; carries the FMU's log messages.
+
+    Attributes
+    ----------
+    function : str
+        The FMI function that failed.
+    status : int
+        Its FMI status (3 = error, 4 = fatal).
+    log : list of LogRecord
+        What the FMU logged up to the failure (the last error explains it).
+    """
+
+    def __init__(self, function: str, status: int, log: list[LogRecord]) -> None:
+        self.function = function
+        self.status = status
+        self.log = list(log)
+        errors = [r.message for r in log if r.status >= 3]
+        detail = errors[-1] if errors else "no message logged"
+        super().__init__(f"{function} failed with status {status}: {detail}")
+
+
 @dataclass
 class LogRecord:
     """One message logged by the FMU."""
@@ -126,6 +148,7 @@ class GeneratorFMU:
         if cs is None:
             raise ValueError(f"{self.path}: not a co-simulation FMU")
         if self.fmi_version == 2:
+            from fmpy import calloc, free
             from fmpy.fmi2 import (
                 FMU2Slave,
                 fmi2CallbackAllocateMemoryTYPE,
@@ -133,7 +156,6 @@ class GeneratorFMU:
                 fmi2CallbackFunctions,
                 fmi2CallbackLoggerTYPE,
             )
-            from fmpy import calloc, free
 
             self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self._unzipped,
                                  modelIdentifier=cs.modelIdentifier, instanceName=name)
@@ -162,10 +184,20 @@ class GeneratorFMU:
     def _setup(self, start_time: float) -> None:
         self._start = start_time
         if self.fmi_version == 2:
-            self.fmu.setupExperiment(startTime=start_time)
+            self._call(self.fmu.setupExperiment, startTime=start_time)
+
+    def _call(self, fn: Any, *args: Any, **kwargs: Any) -> Any:
+        """Call an fmpy method; turn an FMI error into :class:`FMUError` with the log."""
+        from fmpy.fmi1 import FMICallException
+
+        try:
+            return fn(*args, **kwargs)
+        except FMICallException as e:
+            raise FMUError(str(getattr(e, "function", fn.__name__)), int(e.status),
+                           self.log) from None
 
     def variable(self, name: str) -> Any:
-        """fmpy's description of the variable ``name``."""
+        """Fmpy's description of the variable ``name``."""
         try:
             return self._vars[name]
         except KeyError:
@@ -193,11 +225,11 @@ class GeneratorFMU:
                     vals = (vals + [0.0] * size)[:size]
                 vr = [var.valueReference]
                 if var.type == "Float64":
-                    self.fmu.setFloat64(vr, [float(x) for x in vals])
+                    self._call(self.fmu.setFloat64, vr, [float(x) for x in vals])
                 elif var.type == "Int32":
-                    self.fmu.setInt32(vr, [int(x) for x in vals])
+                    self._call(self.fmu.setInt32, vr, [int(x) for x in vals])
                 elif var.type == "Boolean":
-                    self.fmu.setBoolean(vr, [bool(x) for x in vals])
+                    self._call(self.fmu.setBoolean, vr, [bool(x) for x in vals])
                 else:
                     raise TypeError(f"{name}: unsupported type {var.type}")
             else:
@@ -208,11 +240,11 @@ class GeneratorFMU:
                 vrs = [e.valueReference for e in els]
                 typ = els[0].type
                 if typ == "Real":
-                    self.fmu.setReal(vrs, [float(x) for x in vals])
+                    self._call(self.fmu.setReal, vrs, [float(x) for x in vals])
                 elif typ == "Integer":
-                    self.fmu.setInteger(vrs, [int(x) for x in vals])
+                    self._call(self.fmu.setInteger, vrs, [int(x) for x in vals])
                 elif typ == "Boolean":
-                    self.fmu.setBoolean(vrs, [bool(x) for x in vals])
+                    self._call(self.fmu.setBoolean, vrs, [bool(x) for x in vals])
                 else:
                     raise TypeError(f"{name}: unsupported type {typ}")
 
@@ -223,17 +255,18 @@ class GeneratorFMU:
             vr = [var.valueReference]
             n = int(var.dimensions[0].start) if var.dimensions else 1
             if var.type == "Float64":
-                vals = self.fmu.getFloat64(vr, n)
+                vals = self._call(self.fmu.getFloat64, vr, n)
             elif var.type == "Int32":
-                vals = self.fmu.getInt32(vr, n)
+                vals = self._call(self.fmu.getInt32, vr, n)
             else:
-                vals = self.fmu.getBoolean(vr, n)
+                vals = self._call(self.fmu.getBoolean, vr, n)
             return np.array(vals) if var.dimensions else vals[0]
         els = self._elements(name)
         vrs = [e.valueReference for e in els]
         typ = els[0].type
-        vals = (self.fmu.getReal(vrs) if typ == "Real" else
-                self.fmu.getInteger(vrs) if typ == "Integer" else self.fmu.getBoolean(vrs))
+        get = (self.fmu.getReal if typ == "Real" else
+               self.fmu.getInteger if typ == "Integer" else self.fmu.getBoolean)
+        vals = self._call(get, vrs)
         return np.array(vals) if len(els) > 1 else vals[0]
 
     def vr(self, names: Iterable[str]) -> list[int]:
@@ -249,15 +282,15 @@ class GeneratorFMU:
     def initialize(self) -> None:
         """Enter and exit initialization mode (parameters are then fixed)."""
         if self.fmi_version == 2:
-            self.fmu.enterInitializationMode()
+            self._call(self.fmu.enterInitializationMode)
         else:
-            self.fmu.enterInitializationMode(startTime=self._start)
-        self.fmu.exitInitializationMode()
+            self._call(self.fmu.enterInitializationMode, startTime=self._start)
         self._initialized = True
+        self._call(self.fmu.exitInitializationMode)
 
     def do_step(self, h: float) -> None:
         """Advance the FMU by ``h`` seconds (a whole multiple of ``Te``)."""
-        self.fmu.doStep(currentCommunicationPoint=self.time, communicationStepSize=h)
+        self._call(self.fmu.doStep, currentCommunicationPoint=self.time, communicationStepSize=h)
         self.time += h
 
     def get_state(self) -> Any:
@@ -288,8 +321,8 @@ class GeneratorFMU:
     def deserialize_state(self, data: bytes) -> Any:
         """State from :meth:`serialize_state` bytes."""
         if self.fmi_version == 3:
-            return self.fmu.deserializeFMUState(bytearray(data))
-        return self.fmu.deserializeFMUstate(bytearray(data))
+            return self.fmu.deserializeFMUState(bytes(data))
+        return self.fmu.deSerializeFMUstate(bytes(data))
 
     def close(self) -> None:
         """Terminate (when stepping), free the instance, remove the unzipped FMU."""
@@ -445,7 +478,8 @@ def generate(
         t = start_time + step * np.arange(n + 1)
         for k in range(n + 1):
             if k:
-                g.fmu.doStep(currentCommunicationPoint=t[k - 1], communicationStepSize=step)
+                g._call(g.fmu.doStep, currentCommunicationPoint=t[k - 1],
+                        communicationStepSize=step)
             rows[k] = g.get_reals(vrs)
             done[k] = get_bool([vr_done])[0]
             seg[k] = get_int([vr_seg])[0]

@@ -90,7 +90,8 @@ VARIABLES: tuple[Variable, ...] = (
        "one jerk time T_F1), 3 = DJL (dissociated jerk-limited, jerk times T_F1..T_F4)"),
     _p("Te", 2, "Real", DEFAULT_TE, "Sampling period of the generator; the communication step "
        "must be a whole multiple of it", "s", c_name="TE"),
-    _p("t_start", 3, "Real", 0.0, "Time at which the motion starts", "s"),
+    _p("t_start", 3, "Real", 0.0, "Time at which the motion starts (at the first sample of the "
+       "generator, FMU start time + k Te, at or after it)", "s"),
     _p("x0", 4, "Real", 0.0, "Start position", "m"),
     _p("distance", 5, "Real", 0.4, "Signed length of a single-segment move (n_segments = 0)", "m"),
     _p("v_max", 6, "Real", 1.0, "Velocity limit (magnitude)", "m/s"),

@@ -1,0 +1,156 @@
+/*
+ * test_fmi3.c -- drives the FMI 3 layer directly, meant to run under
+ * AddressSanitizer + UBSan or valgrind: arrays, FMU state, bad calls.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "djl_vars.h"
+#include "fmi3Functions.h"
+
+static int failures = 0;
+static char last_message[2048];
+
+#define CHECK(cond, ...)                                                                         \
+    do {                                                                                         \
+        if (!(cond)) {                                                                           \
+            fprintf(stderr, "line %d: ", __LINE__);                                              \
+            fprintf(stderr, __VA_ARGS__);                                                        \
+            fputc('\n', stderr);                                                                 \
+            failures++;                                                                          \
+        }                                                                                        \
+    } while (0)
+
+static void log_message(fmi3InstanceEnvironment env, fmi3Status status, fmi3String category,
+                        fmi3String message)
+{
+    (void)env;
+    (void)status;
+    (void)category;
+    strncpy(last_message, message, sizeof last_message - 1);
+}
+
+static fmi3Instance make(const char *name, int with_logger)
+{
+    fmi3Instance c = fmi3InstantiateCoSimulation(name, DJL_INSTANTIATION_TOKEN, "/tmp", fmi3False,
+                                                 fmi3True, fmi3False, fmi3False, NULL, 0, NULL,
+                                                 with_logger ? log_message : NULL, NULL);
+    CHECK(c != NULL, "instantiate");
+    return c;
+}
+
+static void expect_error(fmi3Status st, const char *fragment)
+{
+    CHECK(st == fmi3Error, "expected fmi3Error, got %d (%s)", (int)st, fragment);
+    CHECK(strstr(last_message, fragment) != NULL, "message \"%s\" lacks \"%s\"", last_message,
+          fragment);
+}
+
+static void run_multisegment_and_state(void)
+{
+    fmi3Instance c = make("ms", 1);
+    fmi3ValueReference vr_n = VR_N_SEGMENTS, vr_d = VR_SEG_DISTANCE, vr_v = VR_SEG_V_END,
+                       vr_x = VR_X, vr_done = VR_DONE;
+    fmi3Int32 n = 20;
+    double d[DJL_VARS_MAX_SEGMENTS] = {0}, ve[DJL_VARS_MAX_SEGMENTS] = {0}, back[DJL_VARS_MAX_SEGMENTS];
+    double x = 0.0, x1[400], x2[400], t = 0.0, total = 0.0;
+    fmi3Boolean done = fmi3False, eh, term, early;
+    fmi3Float64 last;
+    fmi3FMUState s = NULL;
+    size_t size = 0;
+    fmi3Byte *buf;
+    int k;
+    for (k = 0; k < 20; k++) {
+        d[k] = 0.1 + 0.01 * k;
+        ve[k] = k % 3 == 0 ? 0.0 : 0.3;
+        total += d[k];
+    }
+    ve[19] = 0.0;
+    CHECK(fmi3SetInt32(c, &vr_n, 1, &n, 1) == fmi3OK, "n");
+    CHECK(fmi3SetFloat64(c, &vr_d, 1, d, DJL_VARS_MAX_SEGMENTS) == fmi3OK, "d");
+    CHECK(fmi3SetFloat64(c, &vr_v, 1, ve, DJL_VARS_MAX_SEGMENTS) == fmi3OK, "ve");
+    CHECK(fmi3GetFloat64(c, &vr_d, 1, back, DJL_VARS_MAX_SEGMENTS) == fmi3OK, "get array");
+    CHECK(memcmp(back, d, sizeof d) == 0, "array round trip");
+    CHECK(fmi3EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3False, 0.0) == fmi3OK, "enter");
+    CHECK(fmi3ExitInitializationMode(c) == fmi3OK, "exit: %s", last_message);
+    for (k = 0; k < 500; k++, t += 2e-3)
+        fmi3DoStep(c, t, 2e-3, fmi3True, &eh, &term, &early, &last);
+    CHECK(fmi3GetFMUState(c, &s) == fmi3OK, "get state");
+    for (k = 0; k < 400; k++) {
+        fmi3DoStep(c, t + k * 2e-3, 2e-3, fmi3True, &eh, &term, &early, &last);
+        fmi3GetFloat64(c, &vr_x, 1, &x1[k], 1);
+    }
+    CHECK(fmi3SerializedFMUStateSize(c, s, &size) == fmi3OK, "size");
+    buf = (fmi3Byte *)malloc(size);
+    CHECK(fmi3SerializeFMUState(c, s, buf, size) == fmi3OK, "serialize");
+    fmi3FreeFMUState(c, &s);
+    CHECK(fmi3DeserializeFMUState(c, buf, size, &s) == fmi3OK, "deserialize");
+    CHECK(fmi3SetFMUState(c, s) == fmi3OK, "set");
+    for (k = 0; k < 400; k++) {
+        fmi3DoStep(c, t + k * 2e-3, 2e-3, fmi3True, &eh, &term, &early, &last);
+        fmi3GetFloat64(c, &vr_x, 1, &x2[k], 1);
+    }
+    CHECK(memcmp(x1, x2, sizeof x1) == 0, "restored run differs");
+    fmi3FreeFMUState(c, &s);
+    free(buf);
+    t += 400 * 2e-3;
+    for (k = 0; k < 5000 && !done; k++, t += 2e-3) {
+        fmi3DoStep(c, t, 2e-3, fmi3True, &eh, &term, &early, &last);
+        fmi3GetBoolean(c, &vr_done, 1, &done, 1);
+    }
+    fmi3GetFloat64(c, &vr_x, 1, &x, 1);
+    CHECK(done && fabs(x - total) < 1e-12, "end of the multi-segment move: x = %.17g, %.17g", x,
+          total);
+    CHECK(fmi3Terminate(c) == fmi3OK, "terminate");
+    fmi3FreeInstance(c);
+}
+
+static void run_bad_inputs(void)
+{
+    fmi3Instance c;
+    fmi3ValueReference vr;
+    double v = -1.0, two[2] = {0.1, 0.2};
+    fmi3Boolean eh, term, early;
+    fmi3Float64 last;
+    c = make("bad_dmax", 1);
+    vr = VR_D_MAX;
+    fmi3SetFloat64(c, &vr, 1, &v, 1);
+    fmi3EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3False, 0.0);
+    expect_error(fmi3ExitInitializationMode(c), "d_max = -1");
+    fmi3FreeInstance(c);
+    c = make("bad_array", 1);
+    vr = VR_SEG_DISTANCE;
+    expect_error(fmi3SetFloat64(c, &vr, 1, two, 2), "nValues");
+    fmi3FreeInstance(c);
+    c = make("bad_element", 1);
+    vr = VR_SEG_DISTANCE + 3; /* FMI 3 has no element value references */
+    expect_error(fmi3SetFloat64(c, &vr, 1, &v, 1), "unknown value reference");
+    fmi3FreeInstance(c);
+    c = make("bad_step", 1);
+    fmi3EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3False, 0.0);
+    fmi3ExitInitializationMode(c);
+    expect_error(fmi3DoStep(c, 0.0, 2.5e-3, fmi3True, &eh, &term, &early, &last), "whole multiple");
+    fmi3FreeInstance(c);
+    /* no logger at all: errors must still be reported by status, without crashing */
+    c = make("no_logger", 0);
+    vr = VR_TE;
+    v = 0.0;
+    fmi3SetFloat64(c, &vr, 1, &v, 1);
+    fmi3EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3False, 0.0);
+    CHECK(fmi3ExitInitializationMode(c) == fmi3Error, "Te = 0 without logger");
+    fmi3FreeInstance(c);
+    CHECK(fmi3InstantiateModelExchange("me", DJL_INSTANTIATION_TOKEN, "", 0, 1, NULL, log_message)
+              == NULL, "ME refused");
+    CHECK(fmi3InstantiateCoSimulation("x", "{wrong}", "", 0, 1, 0, 0, NULL, 0, NULL, log_message,
+                                      NULL) == NULL, "token");
+}
+
+int main(void)
+{
+    run_multisegment_and_state();
+    run_bad_inputs();
+    printf("fmi3: %d failures\n", failures);
+    return failures ? 1 : 0;
+}

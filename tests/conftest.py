@@ -1,0 +1,50 @@
+"""Shared fixtures: the two FMUs are built once per test session."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import matplotlib
+import pytest
+from hypothesis import settings
+
+settings.register_profile("thorough", max_examples=2000, deadline=None)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "default"))
+
+matplotlib.use("Agg")
+
+# Builds made through harness.fmu.build.default_fmu go to a private cache.
+_CACHE = tempfile.mkdtemp(prefix="djl-fmu-test-cache-")
+os.environ.setdefault("DJL_FMU_CACHE", _CACHE)
+
+
+@pytest.fixture(scope="session")
+def fmu_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return tmp_path_factory.mktemp("fmus")
+
+
+@pytest.fixture(scope="session")
+def fmu2(fmu_dir: Path) -> Path:
+    from harness.fmu.build import build_fmu
+
+    return build_fmu(2, fmu_dir / "JerkLimitedTrajectory-fmi2.fmu")
+
+
+@pytest.fixture(scope="session")
+def fmu3(fmu_dir: Path) -> Path:
+    from harness.fmu.build import build_fmu
+
+    return build_fmu(3, fmu_dir / "JerkLimitedTrajectory-fmi3.fmu")
+
+
+@pytest.fixture(scope="session")
+def fmus(fmu2: Path, fmu3: Path) -> dict[int, Path]:
+    return {2: fmu2, 3: fmu3}
+
+
+@pytest.fixture(params=[2, 3], ids=["fmi2", "fmi3"])
+def fmu(request: pytest.FixtureRequest, fmus: dict[int, Path]) -> Path:
+    """Each FMI version in turn."""
+    return fmus[request.param]

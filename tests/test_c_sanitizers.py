@@ -1,0 +1,73 @@
+"""The C core and both FMI layers under AddressSanitizer + UBSan (and valgrind memcheck).
+
+The drivers in tests/c/ exercise random plans (valid and invalid), FMU state
+save/restore/serialisation, bad calls and several instances.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from harness._resources import fmu_src_dir
+from harness.fmu.build import fmi_include_dir
+
+C_DIR = Path(__file__).parent / "c"
+SAN = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
+BASE = ["-std=c99", "-g", "-O1", "-Wall", "-Wextra", "-Wpedantic", "-Werror"]
+
+PROGRAMS = {
+    "test_core": (["test_core.c"], ["djl_core.c"], ["20000", "7"]),
+    "test_fmi2": (["test_fmi2.c"], ["fmi2.c", "fmu_model.c", "djl_core.c"], []),
+    "test_fmi3": (["test_fmi3.c"], ["fmi3.c", "fmu_model.c", "djl_core.c"], []),
+}
+
+
+def _compile(name: str, out_dir: Path, flags: list[str]) -> Path:
+    tests, srcs, _ = PROGRAMS[name]
+    exe = out_dir / name
+    cmd = ["gcc", *BASE, *flags, f"-I{fmu_src_dir()}", f"-I{fmi_include_dir()}",
+           *[str(C_DIR / t) for t in tests], *[str(fmu_src_dir() / s) for s in srcs],
+           "-o", str(exe), "-lm"]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    return exe
+
+
+def _sanitizers_work(tmp: Path) -> bool:
+    probe = tmp / "probe.c"
+    probe.write_text("int main(void){return 0;}\n")
+    proc = subprocess.run(["gcc", *SAN, str(probe), "-o", str(tmp / "probe")],
+                          capture_output=True)
+    return proc.returncode == 0 and subprocess.run([str(tmp / "probe")]).returncode == 0
+
+
+@pytest.mark.parametrize("name", sorted(PROGRAMS))
+def test_under_asan_and_ubsan(name, tmp_path):
+    if shutil.which("gcc") is None:
+        pytest.skip("gcc not available")
+    if not _sanitizers_work(tmp_path):
+        pytest.skip("gcc cannot build with AddressSanitizer here")
+    exe = _compile(name, tmp_path, SAN)
+    proc = subprocess.run([str(exe), *PROGRAMS[name][2]], capture_output=True, text=True,
+                          timeout=600,
+                          env={"ASAN_OPTIONS": "detect_leaks=1:abort_on_error=0",
+                               "UBSAN_OPTIONS": "print_stacktrace=1"})
+    report = proc.stdout + proc.stderr
+    assert proc.returncode == 0, report
+    assert "runtime error" not in report and "AddressSanitizer" not in report, report
+    assert "0 failures" in proc.stdout
+
+
+@pytest.mark.parametrize("name", ["test_fmi2", "test_fmi3"])
+def test_under_valgrind_memcheck(name, tmp_path):
+    if shutil.which("valgrind") is None:
+        pytest.skip("valgrind not available")
+    exe = _compile(name, tmp_path, [])
+    proc = subprocess.run(["valgrind", "--error-exitcode=99", "--leak-check=full",
+                           "--errors-for-leak-kinds=definite,indirect", "-q", str(exe)],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stdout + proc.stderr

@@ -1,0 +1,61 @@
+"""One source of truth: the committed interface files equal what the spec generates."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+from fmpy import read_model_description
+
+from harness._resources import fmu_src_dir, modeldesc_dir, repo_root
+from harness.fmu import codegen, spec
+
+
+@pytest.fixture(scope="module")
+def root() -> Path:
+    r = repo_root()
+    if r is None:
+        pytest.skip("not a source checkout")
+    return r
+
+
+def test_committed_files_are_generated_from_the_spec(root):
+    stale = [str(p.relative_to(root)) for p, text in codegen.generated_files(root).items()
+             if not p.is_file() or p.read_text() != text]
+    assert not stale, f"regenerate with `python -m harness.fmu.codegen`: {stale}"
+
+
+def test_c_enum_matches_both_model_descriptions():
+    header = (fmu_src_dir() / "djl_vars.h").read_text()
+    enum = {m.group(1): int(m.group(2)) for m in re.finditer(r"VR_(\w+) = (\d+),", header)}
+    token = re.search(r'DJL_INSTANTIATION_TOKEN "([^"]+)"', header).group(1)
+    for version in (2, 3):
+        md = read_model_description(str(modeldesc_dir() / f"fmi{version}" /
+                                        "modelDescription.xml"), validate=False)
+        assert md.guid == token
+        names = {v.name: v.valueReference for v in md.modelVariables}
+        for var in spec.VARIABLES:
+            c_name = var.enum[3:]
+            assert enum[c_name] == var.vr
+            if version == 3 or var.size == 1:
+                assert names[var.name] == var.vr
+            else:
+                for i in range(var.size):
+                    assert names[f"{var.name}[{i + 1}]"] == var.vr + i
+
+
+def test_value_references_are_unique():
+    vrs = [vr for v in spec.VARIABLES for _, vr in spec.fmi2_scalars(v)]
+    assert len(vrs) == len(set(vrs))
+
+
+def test_token_changes_with_the_interface(monkeypatch):
+    before = spec._fingerprint()
+    monkeypatch.setattr(spec, "VARIABLES", spec.VARIABLES[:-1])
+    assert spec._fingerprint() != before
+
+
+def test_core_capacity_matches_spec():
+    core = (fmu_src_dir() / "djl_core.h").read_text()
+    assert f"#define DJL_MAX_SEGMENTS {spec.MAX_SEGMENTS}" in core

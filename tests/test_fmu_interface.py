@@ -1,0 +1,337 @@
+"""The FMU through fmpy: bad inputs, state machine, FMU state, instances, steps, time."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from harness.fmu.runner import FMUError, GeneratorFMU, generate
+
+from _motion_checks import check_end_and_limits
+
+# ----------------------------------------------------------------- helpers
+
+
+def _healthy_afterwards(fmu) -> None:
+    """Nothing else broke: a fresh instance in the same process still runs correctly."""
+    tr = generate({"profile": 2, "distance": 0.1}, fmu=fmu)
+    check_end_and_limits(tr)
+
+
+def _expect_init_error(fmu, params: dict, *fragments: str) -> None:
+    with GeneratorFMU(fmu, params=params) as g:
+        with pytest.raises(FMUError) as info:
+            g.initialize()
+        err = info.value
+        assert err.status == 3
+        msg = str(err)
+        for f in fragments:
+            assert f in msg, (f, msg)
+        # the error also went through the logger callback, in the error category
+        assert any(r.status == 3 and r.category == "logStatusError" for r in g.log)
+        # no NaN in the outputs, even now
+        for name in ("x", "v", "a", "j"):
+            value = g.get(name)
+            assert math.isfinite(value), (name, value)
+    _healthy_afterwards(fmu)
+
+
+BAD_PARAMETERS = [
+    ({"v_max": -1.0}, ["v_max = -1"]),
+    ({"v_max": 0.0}, ["v_max = 0"]),
+    ({"v_max": math.nan}, ["v_max = nan"]),
+    ({"v_max": math.inf}, ["v_max = inf"]),
+    ({"a_max": -2.0}, ["a_max = -2"]),
+    ({"a_max": 0.0}, ["a_max = 0"]),
+    ({"a_max": math.nan}, ["a_max = nan"]),
+    ({"a_max": -math.inf}, ["a_max = -inf"]),
+    ({"d_max": 0.0}, ["d_max = 0"]),
+    ({"d_max": math.nan}, ["d_max = nan"]),
+    ({"d_max": math.inf}, ["d_max = inf"]),
+    ({"Te": 0.0}, ["Te = 0"]),
+    ({"Te": -1e-3}, ["Te = -0.001"]),
+    ({"Te": math.nan}, ["Te = nan"]),
+    ({"T_F1": 0.0}, ["T_F1 = 0"]),
+    ({"T_F3": -0.05}, ["T_F3 = -0.05"]),
+    ({"T_F4": math.nan}, ["T_F4 = nan"]),
+    ({"T_F2": 0.0004}, ["T_F2 = 0.0004", "rounds to 0 samples"]),
+    ({"profile": 2, "T_F1": 0.00049}, ["T_F1 = 0.00049", "rounds to 0 samples"]),
+    ({"profile": 4}, ["profile = 4"]),
+    ({"profile": 0}, ["profile = 0"]),
+    ({"short_stage": 3}, ["short_stage = 3"]),
+    ({"n_segments": -1}, ["n_segments = -1"]),
+    ({"n_segments": 33}, ["n_segments = 33"]),
+    ({"v_e": 1.5}, ["v_e = 1.5", "v_max = 1"]),
+    ({"v0": -2.0, "distance": -0.5}, ["v0 = -2"]),
+    ({"v_e": math.inf}, ["v_e = inf"]),
+    ({"distance": math.nan}, ["distance = nan"]),
+    ({"x0": math.inf}, ["x0 = inf"]),
+    ({"t_start": math.nan}, ["t_start = nan"]),
+    ({"v_e": 0.9, "distance": 0.001}, ["distance = 0.001", "too short"]),
+    ({"v_e": -0.2}, ["v_e = -0.2", "direction reverses"]),
+    ({"n_segments": 3, "seg_distance": [0.2, 0.2, 0.2], "seg_v_end": [0.5, 2.0, 0.0]},
+     ["seg_v_end[2] = 2"]),
+    ({"n_segments": 3, "seg_distance": [0.9, 0.01, 0.5], "seg_v_end": [1.0, 0.0, 0.0],
+      "a_max": 1.0, "d_max": 1.0},
+     ["seg_distance[2] = 0.01", "too short"]),
+    ({"n_segments": 2, "seg_distance": [0.2, math.nan], "seg_v_end": [0.0, 0.0]},
+     ["seg_distance[2] = nan"]),
+    ({"n_segments": 2, "seg_distance": [0.2, -0.2], "seg_v_end": [0.3, 0.0]},
+     ["seg_v_end[1] = 0.3", "direction reverses"]),
+]
+
+
+@pytest.mark.parametrize("params,fragments", BAD_PARAMETERS,
+                         ids=[next(iter(p)) + "=" + str(next(iter(p.values())))[:12]
+                              for p, _ in BAD_PARAMETERS])
+def test_bad_parameter_is_an_fmi_error_naming_it(fmu, params, fragments):
+    _expect_init_error(fmu, params, *fragments)
+
+
+def test_step_not_a_multiple_of_Te(fmu):
+    with GeneratorFMU(fmu) as g:
+        g.initialize()
+        g.do_step(2e-3)
+        with pytest.raises(FMUError) as info:
+            g.do_step(1.5e-3)
+        assert "whole multiple of Te" in str(info.value)
+        assert "0.0015" in str(info.value)
+        assert math.isfinite(g.get("x"))
+    _healthy_afterwards(fmu)
+
+
+@pytest.mark.parametrize("h", [0.0, -1e-3, math.nan, 0.4e-3])
+def test_step_size_not_positive_or_below_Te(fmu, h):
+    with GeneratorFMU(fmu) as g:
+        g.initialize()
+        with pytest.raises(FMUError):
+            g.do_step(h)
+    _healthy_afterwards(fmu)
+
+
+def test_step_from_the_wrong_time(fmu):
+    with GeneratorFMU(fmu) as g:
+        g.initialize()
+        g.time = 0.5  # the FMU is at 0
+        with pytest.raises(FMUError) as info:
+            g.do_step(1e-3)
+        assert "currentCommunicationPoint = 0.5" in str(info.value)
+    _healthy_afterwards(fmu)
+
+
+def test_unknown_value_reference(fmu):
+    with GeneratorFMU(fmu) as g:
+        g.initialize()
+        get = g.fmu.getFloat64 if g.fmi_version == 3 else g.fmu.getReal
+        with pytest.raises(FMUError) as info:
+            g._call(get, [999])
+        assert "unknown value reference 999" in str(info.value)
+    with GeneratorFMU(fmu) as g:
+        setter = g.fmu.setFloat64 if g.fmi_version == 3 else g.fmu.setReal
+        with pytest.raises(FMUError) as info:
+            g._call(setter, [12345], [1.0])
+        assert "unknown value reference 12345" in str(info.value)
+    _healthy_afterwards(fmu)
+
+
+def test_wrong_type_and_outputs_cannot_be_set(fmu):
+    with GeneratorFMU(fmu) as g:
+        vr = g.variable("done").valueReference
+        get = g.fmu.getFloat64 if g.fmi_version == 3 else g.fmu.getReal
+        g.initialize()
+        with pytest.raises(FMUError) as info:
+            g._call(get, [vr])
+        assert "done" in str(info.value) and "Boolean" in str(info.value)
+    with GeneratorFMU(fmu) as g:
+        with pytest.raises(FMUError) as info:
+            g.set({"x": 1.0})
+        assert "x (value reference" in str(info.value) and "output" in str(info.value)
+    _healthy_afterwards(fmu)
+
+
+def test_calls_out_of_order(fmu):
+    # doStep before initialization
+    with GeneratorFMU(fmu) as g:
+        with pytest.raises(FMUError) as info:
+            g._call(g.fmu.doStep, currentCommunicationPoint=0.0, communicationStepSize=1e-3)
+        assert "must not be called in state Instantiated" in str(info.value)
+    # a fixed parameter after initialization
+    with GeneratorFMU(fmu) as g:
+        g.initialize()
+        with pytest.raises(FMUError) as info:
+            g.set({"v_max": 2.0})
+        assert "v_max is a fixed parameter" in str(info.value)
+    # exit initialization twice
+    with GeneratorFMU(fmu) as g:
+        g.initialize()
+        with pytest.raises(FMUError) as info:
+            g._call(g.fmu.exitInitializationMode)
+        assert "must not be called in state StepMode" in str(info.value)
+    # after an error only reset (and free) bring it back
+    with GeneratorFMU(fmu, params={"v_max": -1.0}) as g:
+        with pytest.raises(FMUError):
+            g.initialize()
+        with pytest.raises(FMUError) as info:
+            g._call(g.fmu.doStep, currentCommunicationPoint=0.0, communicationStepSize=1e-3)
+        assert "state Error" in str(info.value)
+        g.fmu.reset()
+        g._initialized = False
+        if g.fmi_version == 2:
+            g.fmu.setupExperiment(startTime=0.0)
+        g.set({"distance": 0.2})
+        g.initialize()
+        g.do_step(1.0)
+        assert g.get("x") == pytest.approx(0.2, rel=1e-12)
+    _healthy_afterwards(fmu)
+
+
+def test_fmi3_array_with_wrong_count():
+    from harness.fmu.build import default_fmu
+
+    with GeneratorFMU(default_fmu(3)) as g:
+        vr = g.variable("seg_distance").valueReference
+        with pytest.raises(FMUError) as info:
+            g._call(g.fmu.setFloat64, [vr], [0.1, 0.2])
+        assert "nValues" in str(info.value)
+
+
+def test_fmi2_instantiation_with_wrong_guid(fmu2):
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    md = read_model_description(str(fmu2))
+    unz = extract(str(fmu2))
+    s = FMU2Slave(guid="{00000000-0000-0000-0000-000000000000}", unzipDirectory=unz,
+                  modelIdentifier=md.coSimulation.modelIdentifier, instanceName="bad")
+    with pytest.raises(Exception, match="[Ff]ailed to instantiate"):
+        s.instantiate()
+    _healthy_afterwards(fmu2)
+
+
+# -------------------------------------------------------------- FMU state
+
+def _record(g: GeneratorFMU, n: int, h: float) -> np.ndarray:
+    vrs = g.vr(["x", "v", "a", "j", "x_AL", "v_AL", "a_AL"])
+    out = []
+    for _ in range(n):
+        g.do_step(h)
+        out.append(g.get_reals(vrs) + [float(g.get("done"))])
+    return np.array(out)
+
+
+def test_fmu_state_restore_is_bit_identical(fmu):
+    p = {"profile": 3, "distance": 0.3, "T_F2": 0.12, "v0": 0.1, "t_start": 0.01}
+    with GeneratorFMU(fmu, params=p) as g:
+        g.initialize()
+        _record(g, 123, 1e-3)
+        t_saved = g.time
+        state = g.get_state()
+        first = _record(g, 600, 1e-3)
+        g.set_state(state, t_saved)
+        second = _record(g, 600, 1e-3)
+        assert np.array_equal(first, second)
+        # serialised into another instance with other parameters: it takes everything
+        data = g.serialize_state(state)
+        g.free_state(state)
+        with GeneratorFMU(fmu, params={"profile": 1, "distance": -2.0}) as h:
+            h.initialize()
+            h.set_state(h.deserialize_state(data), t_saved)
+            third = _record(h, 600, 1e-3)
+        assert np.array_equal(first, third)
+        assert first[-1, -1] == 1.0  # reached the end
+
+
+def test_corrupt_serialized_state_is_refused(fmu):
+    with GeneratorFMU(fmu) as g:
+        g.initialize()
+        state = g.get_state()
+        data = bytearray(g.serialize_state(state))
+        g.free_state(state)
+    bad_header = bytearray(data)
+    bad_header[0] ^= 0xFF
+    for blob, fragment in ((bad_header, "not a state of this FMU"),
+                           (data[:100], "100 bytes")):
+        with GeneratorFMU(fmu) as g:
+            g.initialize()
+            with pytest.raises(FMUError) as info:
+                g._call(g.deserialize_state, bytes(blob))
+            assert fragment in str(info.value)
+    _healthy_afterwards(fmu)
+
+
+def test_instances_are_independent(fmus):
+    pa = {"profile": 2, "distance": 0.4, "T_F1": 0.05}
+    pb = {"profile": 3, "distance": -0.2, "T_F3": 0.1}
+    alone_a = generate(pa, fmu=fmus[2], t_stop=0.8)
+    alone_b = generate(pb, fmu=fmus[3], t_stop=0.8)
+    with GeneratorFMU(fmus[2], params=pa, instance_name="a") as a, \
+            GeneratorFMU(fmus[3], params=pb, instance_name="b") as b, \
+            GeneratorFMU(fmus[2], params=pb, instance_name="c") as c:
+        for g in (a, b, c):
+            g.initialize()
+        xa, xb, xc = [a.get("x")], [b.get("x")], [c.get("x")]
+        for _ in range(800):
+            for g, acc in ((a, xa), (b, xb), (c, xc)):
+                g.do_step(1e-3)
+                acc.append(g.get("x"))
+    assert np.array_equal(xa, alone_a.x)
+    assert np.array_equal(xb, alone_b.x)
+    assert np.array_equal(xc, alone_b.x)   # FMI 2 and FMI 3 agree too
+
+
+# ----------------------------------------------------------- steps, time
+
+@pytest.mark.parametrize("k", [2, 7, 50])
+def test_any_whole_multiple_of_Te(fmu, k):
+    fine = generate({"profile": 3}, fmu=fmu, t_stop=0.7)
+    coarse = generate({"profile": 3}, fmu=fmu, t_stop=0.7, dt=k * 1e-3)
+    for name in ("x", "v", "a", "j", "done"):
+        assert np.array_equal(getattr(coarse, name), getattr(fine, name)[::k][:len(coarse.t)])
+
+
+def test_start_time_and_t_start(fmu):
+    base = generate({"profile": 2}, fmu=fmu)
+    late = generate({"profile": 2, "t_start": 10.25}, fmu=fmu, start_time=10.0)
+    k = round(0.25 / 1e-3)
+    assert np.all(late.x[:k + 1] == 0.0)
+    n = len(base.t)
+    for name in ("x", "v", "a", "j"):
+        np.testing.assert_array_equal(getattr(late, name)[k:k + n], getattr(base, name))
+
+
+def test_t_start_between_samples_starts_at_the_next_sample(fmu):
+    tr = generate({"profile": 2, "t_start": 0.1234}, fmu=fmu, debug_logging=True)
+    moving = np.nonzero(tr.j)[0]
+    assert tr.t[moving[0]] == pytest.approx(0.124)
+    assert any("not a sample of the generator" in r.message for r in tr.log)
+    check_end_and_limits(tr)
+
+
+def test_moving_before_the_start(fmu):
+    tr = generate({"profile": 2, "v0": 0.3, "distance": 0.5, "t_start": 0.2, "x0": 1.0},
+                  fmu=fmu)
+    k = round(0.2 / 1e-3)
+    np.testing.assert_allclose(tr.x[:k + 1], 1.0 + 0.3 * (tr.t[:k + 1] - 0.2), rtol=0,
+                               atol=1e-15)
+    assert np.all(tr.v[:k + 1] == 0.3)
+    check_end_and_limits(tr)
+
+
+def test_no_drift_over_a_long_motion(fmu2):
+    """10 million samples: positions stay exact; one doStep may cover them all."""
+    Te, v = 1e-4, 1.0
+    p = {"profile": 3, "Te": Te, "distance": 1000.0, "v_max": v, "a_max": 2.0, "d_max": 2.0,
+         "T_F1": 0.05, "T_F2": 0.07, "T_F3": 0.09, "T_F4": 0.03, "x0": 5.0}
+    tr = generate(p, fmu=fmu2, dt=1.0, t_stop=1002.0)
+    check_end_and_limits(tr)
+    # the cruise is exactly linear in time (no accumulated rounding)
+    cruise = (tr.t > 10) & (tr.t < 990)
+    slope = np.diff(tr.x[cruise]) / np.diff(tr.t[cruise])
+    assert np.abs(slope - slope[0]).max() <= 1e-11
+    with GeneratorFMU(fmu2, params=p) as g:
+        g.initialize()
+        g.do_step(1002.0)  # one step over 10,020,000 samples
+        assert g.get("x") == pytest.approx(1005.0, rel=1e-15, abs=1e-12)
+        assert g.get("done")

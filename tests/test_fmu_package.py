@@ -1,0 +1,146 @@
+"""The FMU as a file: validation, contents, exported symbols, rebuild from sources, CLI."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy import read_model_description
+from fmpy.validation import validate_fmu
+
+from harness.fmu import codegen, spec
+from harness.fmu.runner import generate
+
+PLATFORM_DIR = {2: "binaries/linux64", 3: "binaries/x86_64-linux"}
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_validates_without_problems(fmus, version):
+    assert validate_fmu(str(fmus[version])) == []
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_contents(fmus, version):
+    names = set(zipfile.ZipFile(fmus[version]).namelist())
+    assert "modelDescription.xml" in names
+    assert f"{PLATFORM_DIR[version]}/JerkLimitedTrajectory.so" in names
+    srcs = {f"sources/{f}" for f in codegen.SOURCES[version] + codegen.HEADERS}
+    assert srcs <= names
+    if version == 3:
+        assert "sources/buildDescription.xml" in names
+    # nothing third-party: no FMI headers shipped
+    assert not any(re.search(r"fmi[23]\w*\.h$", n) for n in names)
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_model_description_declares_capabilities(fmus, version):
+    md = read_model_description(str(fmus[version]))
+    cs = md.coSimulation
+    assert cs.modelIdentifier == "JerkLimitedTrajectory"
+    assert cs.canHandleVariableCommunicationStepSize
+    assert cs.canGetAndSetFMUstate and cs.canSerializeFMUstate
+    if version == 3:
+        assert float(cs.fixedInternalStepSize) == pytest.approx(spec.DEFAULT_TE)
+    assert md.guid == spec.INSTANTIATION_TOKEN
+    declared = {getattr(c, "name", c) for c in md.logCategories}
+    assert declared == {c for c, _ in spec.LOG_CATEGORIES}
+    # the issue's contract: names, causality, variability, type, unit
+    by = {v.name: v for v in md.modelVariables}
+    want = {"profile": ("parameter", None), "Te": ("parameter", "s"),
+            "t_start": ("parameter", "s"), "x0": ("parameter", "m"),
+            "distance": ("parameter", "m"), "v_max": ("parameter", "m/s"),
+            "a_max": ("parameter", "m/s2"), "d_max": ("parameter", "m/s2"),
+            "T_F1": ("parameter", "s"), "T_F2": ("parameter", "s"), "T_F3": ("parameter", "s"),
+            "T_F4": ("parameter", "s"), "x": ("output", "m"), "v": ("output", "m/s"),
+            "a": ("output", "m/s2"), "j": ("output", "m/s3"), "done": ("output", None)}
+    for name, (causality, unit) in want.items():
+        v = by[name]
+        assert v.causality == causality, name
+        if causality == "parameter":
+            assert v.variability == "fixed", name
+        if unit:
+            assert v.unit == unit, name
+    assert by["done"].type == "Boolean"
+    assert by["profile"].type == ("Integer" if version == 2 else "Int32")
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_only_fmi_functions_are_exported(fmus, version, tmp_path):
+    if shutil.which("nm") is None:
+        pytest.skip("nm not available")
+    with zipfile.ZipFile(fmus[version]) as z:
+        z.extract(f"{PLATFORM_DIR[version]}/JerkLimitedTrajectory.so", tmp_path)
+    lib = tmp_path / PLATFORM_DIR[version] / "JerkLimitedTrajectory.so"
+    out = subprocess.run(["nm", "-D", "--defined-only", str(lib)], capture_output=True,
+                         text=True, check=True).stdout
+    names = [line.split()[-1] for line in out.splitlines() if line.strip()]
+    assert names, "no exported symbol at all"
+    assert all(n.startswith(f"fmi{version}") for n in names), [
+        n for n in names if not n.startswith(f"fmi{version}")]
+    for required in ("DoStep", "Instantiate" if version == 2 else "InstantiateCoSimulation",
+                     "GetFMUstate" if version == 2 else "GetFMUState",
+                     "SerializeFMUstate" if version == 2 else "SerializeFMUState"):
+        assert f"fmi{version}{required}" in names
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_rebuild_from_sources_with_fmpy(fmus, version, tmp_path):
+    """`fmpy compile` route: CMake over the FMU's sources/, then identical outputs."""
+    if shutil.which("cmake") is None:
+        try:
+            import cmake  # noqa: F401  (PyPI cmake, a dependency of fmpy)
+        except ImportError:
+            pytest.skip("cmake not available")
+    from fmpy import extract
+    from fmpy.build import build_platform_binary
+
+    unzip = Path(extract(str(fmus[version]), unzipdir=str(tmp_path / "unz")))
+    lib = unzip / PLATFORM_DIR[version] / "JerkLimitedTrajectory.so"
+    lib.unlink()
+    (tmp_path / "build").mkdir()
+    build_platform_binary(unzip, build_dir=tmp_path / "build")
+    assert lib.is_file()
+    rebuilt = tmp_path / f"rebuilt{version}.fmu"
+    with zipfile.ZipFile(rebuilt, "w") as z:
+        for p in sorted(unzip.rglob("*")):
+            if p.is_file():
+                z.write(p, p.relative_to(unzip).as_posix())
+    assert validate_fmu(str(rebuilt)) == []
+    params = {"profile": 3, "distance": 0.25, "T_F2": 0.1}
+    a = generate(params, fmu=fmus[version])
+    b = generate(params, fmu=rebuilt)
+    for name in ("x", "v", "a", "j", "done"):
+        np.testing.assert_allclose(getattr(b, name), getattr(a, name), rtol=1e-14, atol=1e-15)
+
+
+def test_cli_build_writes_a_valid_fmu(tmp_path):
+    out = tmp_path / "sub" / "g3.fmu"
+    proc = subprocess.run([sys.executable, "-m", "harness.cli", "build", "--fmi-version", "3",
+                           "-o", str(out)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert "validated" in proc.stdout
+    assert validate_fmu(str(out)) == []
+
+
+def test_cli_build_refuses_bad_version(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "harness.cli", "build", "--fmi-version", "4",
+                           "-o", str(tmp_path / "x.fmu")], capture_output=True, text=True)
+    assert proc.returncode != 0
+    assert "invalid choice" in proc.stderr
+    assert not (tmp_path / "x.fmu").exists()
+
+
+def test_cli_help_explains_commands():
+    proc = subprocess.run([sys.executable, "-m", "harness.cli", "--help"], capture_output=True,
+                          text=True)
+    assert proc.returncode == 0
+    assert "build" in proc.stdout and "demo" in proc.stdout
+    proc = subprocess.run([sys.executable, "-m", "harness.cli", "build", "--help"],
+                          capture_output=True, text=True)
+    assert "--fmi-version" in proc.stdout and "sources/" in proc.stdout
