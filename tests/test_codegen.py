@@ -8,16 +8,25 @@ from pathlib import Path
 import pytest
 from fmpy import read_model_description
 
-from harness._resources import fmu_src_dir, modeldesc_dir, repo_root
+from harness._resources import fmu_src_dir, modeldesc_dir
 from harness.fmu import codegen, spec
 
 
 @pytest.fixture(scope="module")
 def root() -> Path:
-    r = repo_root()
-    if r is None:
-        pytest.skip("not a source checkout")
+    """The checkout the tests belong to (the package itself may be installed elsewhere)."""
+    r = Path(__file__).resolve().parents[1]
+    assert (r / "fmu_src" / "djl_core.c").is_file(), r
     return r
+
+
+def test_installed_sources_are_the_checkouts(root):
+    """An installed package ships exactly the checkout's C sources and model descriptions."""
+    for sub, installed in (("fmu_src", fmu_src_dir()), ("modeldesc", modeldesc_dir())):
+        for f in sorted((root / sub).rglob("*")):
+            if f.is_file():
+                twin = installed / f.relative_to(root / sub)
+                assert twin.read_bytes() == f.read_bytes(), twin
 
 
 def test_committed_files_are_generated_from_the_spec(root):
@@ -59,3 +68,10 @@ def test_token_changes_with_the_interface(monkeypatch):
 def test_core_capacity_matches_spec():
     core = (fmu_src_dir() / "djl_core.h").read_text()
     assert f"#define DJL_MAX_SEGMENTS {spec.MAX_SEGMENTS}" in core
+
+
+def test_readme_variable_table_is_current(root):
+    readme = (root / "README.md").read_text()
+    assert codegen.readme_table() in readme, (
+        "README.md: paste the output of `python -c 'from harness.fmu.codegen import "
+        "readme_table; print(readme_table())'`")

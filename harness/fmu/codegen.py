@@ -297,6 +297,24 @@ def fmi3_build_description() -> str:
     return "\n".join(x) + "\n"
 
 
+# --------------------------------------------------------------------------- README
+
+
+def readme_table() -> str:
+    """Markdown table of the FMU variables (pasted in README.md; a test checks it)."""
+    rows = ["| name | causality / variability | type (FMI 2 / FMI 3) | unit | start | meaning |",
+            "|---|---|---|---|---|---|"]
+    types = {"Real": "Real / Float64", "Integer": "Integer / Int32", "Boolean": "Boolean"}
+    for v in VARIABLES:
+        if v.causality == "independent":
+            continue
+        name = f"`{v.name}`" + (f"[1..{v.size}]" if v.size > 1 else "")
+        start = "" if v.start is None else _fmt(v.start, v.type)
+        rows.append(f"| {name} | {v.causality} / {v.variability} | {types[v.type]} | "
+                    f"{v.unit or '–'} | {start} | {v.description} |")
+    return "\n".join(rows) + "\n"
+
+
 # --------------------------------------------------------------------------- files
 
 
