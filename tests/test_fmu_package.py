@@ -106,6 +106,12 @@ def test_rebuild_from_sources_with_fmpy(fmus, version, tmp_path):
     (tmp_path / "build").mkdir()
     build_platform_binary(unzip, build_dir=tmp_path / "build")
     assert lib.is_file()
+    if shutil.which("nm"):
+        # CMake builds without -fvisibility=hidden: the headers' pragmas keep the core hidden
+        out = subprocess.run(["nm", "-D", "--defined-only", str(lib)], capture_output=True,
+                             text=True, check=True).stdout
+        names = [line.split()[-1] for line in out.splitlines() if line.strip()]
+        assert names and all(n.startswith(f"fmi{version}") for n in names), names
     rebuilt = tmp_path / f"rebuilt{version}.fmu"
     with zipfile.ZipFile(rebuilt, "w") as z:
         for p in sorted(unzip.rglob("*")):

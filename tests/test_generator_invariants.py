@@ -98,14 +98,14 @@ def _n(default: int) -> int:
 
 
 @settings(max_examples=_n(120), deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(single_moves())
-def test_random_single_moves(fmu2, p):
+@given(single_moves(), st.sampled_from([2, 3]))
+def test_random_single_moves(fmus, p, version):
     motion = abs(p["distance"]) / p["v_max"] + 4 * max(p["T_F1"], p["T_F2"], p["T_F3"], p["T_F4"])
     if motion / p["Te"] > 15000:  # keep the test fast: sub-sample very long motions
         dt = p["Te"] * math.ceil(motion / p["Te"] / 15000)
     else:
         dt = p["Te"]
-    tr = generate(p, fmu=fmu2, dt=dt)
+    tr = generate(p, fmu=fmus[version], dt=dt)
     k = check_end_and_limits(tr)
     assert tr.t[k] >= p["t_start"]
     if (dt == p["Te"] and p["short_stage"] == 1 and p["profile"] > 1 and p["v0"] == 0
@@ -141,8 +141,9 @@ def multi_moves(draw):
 
 
 @settings(max_examples=_n(40), deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(multi_moves())
-def test_random_multi_segment_moves(fmu2, p):
+@given(multi_moves(), st.sampled_from([2, 3]))
+def test_random_multi_segment_moves(fmus, p, version):
+    fmu2 = fmus[version]
     with GeneratorFMU(fmu2, params=p) as g:
         g.initialize()
         samples = g.get("motion_time") / p["Te"]
