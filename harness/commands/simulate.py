@@ -1,0 +1,174 @@
+"""``djl-fmu simulate``: co-simulate AL / JL / DJL on a flexible axis whose mode moves with Z."""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+from pathlib import Path
+
+DESCRIPTION = """\
+Co-simulate the generator FMU (one instance for the excited X or Y axis, one for
+the Z axis) with a flexible axis whose vibration mode depends on the Z position
+(Bearee & Olabi 2013, sections 3-4), and compare the AL, JL and DJL profiles:
+residual vibration (peak |deflection| after the reference ends, and the free
+oscillation amplitude), motion time, rise time and settling time.
+
+JL is tuned to the modal period at the end of the motion, DJL to the period at
+the start of each constant-jerk stage (Z motion included), as in the paper,
+unless the scenario imposes jerk times.
+
+SCENARIO is a TOML file (format: docs/harness.md) or the name of an embedded
+scenario; with none, the embedded defaults run: X and Y (the two moves of
+Table 1 of the paper) and sweep-X, sweep-Y (its test set, Table 2).
+
+Outputs, in --out (default ./djl-fmu-out/simulate), written only once every
+simulation has succeeded:
+  <name>.csv      one row per profile (per case and profile for a sweep)
+  <name>.png      reference x/v/a/j, deflection, f(t) and z(t) (a sweep: DJL vs JL per case)
+  table2.csv      Table 2 statistics, when sweeps ran
+  summary.txt     the tables printed on screen
+  JerkLimitedTrajectory-fmi2.fmu, JerkLimitedTrajectory-fmi3.fmu
+                  with no SCENARIO (the default run): the generator FMUs built from
+                  this package, validated with fmpy (--no-fmus to skip)
+"""
+
+EPILOG = """\
+examples:
+  djl-fmu simulate                         the default scenarios (X, Y, sweep-X, sweep-Y)
+  djl-fmu simulate X --fmi-version 3       scenario X on the FMI 3.0 FMU
+  djl-fmu simulate my_axis.toml --fmu my_generator.fmu
+  djl-fmu simulate --list                  the embedded scenarios
+
+Exit status: 0 on success, 2 for a bad scenario or option (nothing simulated, nothing
+written), 1 if a simulation fails.
+"""
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``simulate`` command."""
+    p = sub.add_parser(
+        "simulate",
+        help="co-simulate AL/JL/DJL on a flexible axis whose mode moves with Z "
+             "(scenario files; default: the paper's X, Y and test-set scenarios)",
+        description=DESCRIPTION,
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("scenarios", nargs="*", metavar="SCENARIO",
+                   help="TOML scenario file or embedded scenario name (default: X Y sweep-X "
+                        "sweep-Y)")
+    p.add_argument("-o", "--out", type=Path, default=Path("djl-fmu-out") / "simulate",
+                   metavar="DIR", help="output folder (default: ./djl-fmu-out/simulate)")
+    p.add_argument("--fmi-version", type=int, choices=(2, 3), default=None,
+                   help="use the package's FMI 2.0 or 3.0 FMU (default: the scenario's, "
+                        "which defaults to 2)")
+    p.add_argument("--fmu", type=Path, default=None, metavar="PATH",
+                   help="a generator FMU file with the same variables (overrides the "
+                        "scenario's)")
+    p.add_argument("--no-plot", action="store_true", help="do not write the PNG figures")
+    p.add_argument("--list", action="store_true",
+                   help="list the embedded scenarios and exit")
+    p.add_argument("-q", "--quiet", action="store_true", help="do not print the tables")
+    p.add_argument("--no-fmus", action="store_true",
+                   help="in the default run, do not write the FMI 2.0 / 3.0 FMU files")
+    p.set_defaults(func=run)
+
+
+def _safe(name: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_") or "scenario"
+
+
+def run(args: argparse.Namespace) -> int:
+    """Check every scenario, run them, then write the outputs; return the exit status."""
+    from ..scenario import DEFAULT_SCENARIOS, ScenarioError, embedded_scenarios, load_scenario
+
+    if args.list:
+        for name, desc in embedded_scenarios().items():
+            print(f"{name:10s} {desc}")
+        return 0
+
+    # 1. check everything before simulating anything
+    names = args.scenarios or list(DEFAULT_SCENARIOS)
+    try:
+        scenarios = [load_scenario(n) for n in names]
+        if args.fmu is not None or args.fmi_version is not None:
+            scenarios = [s.with_fmu(args.fmu, args.fmi_version) for s in scenarios]
+    except ScenarioError as e:
+        print(f"djl-fmu simulate: {e}", file=sys.stderr)
+        return 2
+    stems = [_safe(s.name) for s in scenarios]
+    if len(set(stems)) != len(stems):
+        print("djl-fmu simulate: two scenarios have the same name: "
+              + ", ".join(s.name for s in scenarios), file=sys.stderr)
+        return 2
+    if args.out.exists() and not args.out.is_dir():
+        print(f"djl-fmu simulate: --out {args.out} exists and is not a directory",
+              file=sys.stderr)
+        return 2
+
+    # 2. simulate (nothing is written yet)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from ..cosim import run_scenario
+    from ..fmu.runner import FMUError
+    from ..results import SweepResult, format_table2, save_figure, table2_rows, write_csv
+
+    results = []
+    try:
+        for sc in scenarios:
+            results.append(run_scenario(sc, progress=not args.quiet))
+    except (FMUError, ValueError, OSError) as e:
+        print(f"djl-fmu simulate: simulation failed ({sc.name}): {e}", file=sys.stderr)
+        return 1
+
+    texts = []
+    for r in results:
+        if not isinstance(r, SweepResult):
+            texts.append(r.table())
+    sweeps = [r for r in results if isinstance(r, SweepResult)]
+    if sweeps:
+        texts.append(format_table2(sweeps))
+    summary = "\n\n".join(texts)
+
+    # 3. write everything
+    out: Path = args.out
+    written: list[Path] = []
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        for stem, r in zip(stems, results, strict=True):
+            written.append(r.to_csv(out / f"{stem}.csv"))
+            if not args.no_plot:
+                written.append(save_figure(r.plot(), out / f"{stem}.png"))
+        if sweeps:
+            written.append(write_csv(out / "table2.csv", table2_rows(sweeps)))
+        if not args.scenarios and not args.no_fmus:
+            from fmpy.validation import validate_fmu
+
+            from ..fmu.build import build_fmu
+
+            for v in (2, 3):
+                fmu_path = build_fmu(v, out / f"JerkLimitedTrajectory-fmi{v}.fmu")
+                written.append(fmu_path)
+                problems = validate_fmu(str(fmu_path))
+                if problems:
+                    print(f"djl-fmu simulate: {fmu_path} does not validate: "
+                          + "; ".join(problems), file=sys.stderr)
+                    return 1
+        summary_path = out / "summary.txt"
+        tmp = out / ".summary.txt.tmp"
+        tmp.write_text(summary + "\n", encoding="utf-8")
+        tmp.replace(summary_path)
+        written.append(summary_path)
+    except (OSError, RuntimeError) as e:
+        for pth in written:
+            pth.unlink(missing_ok=True)
+        print(f"djl-fmu simulate: cannot write the outputs in {out}: {e}", file=sys.stderr)
+        return 1
+
+    if not args.quiet:
+        print(summary)
+        print()
+    print(f"wrote {len(written)} files in {out}/: " + ", ".join(p.name for p in written))
+    return 0

@@ -1,0 +1,611 @@
+"""Co-simulation master: two generator FMUs (excited axis, Z axis) and the flexible axis.
+
+The master steps, at every communication point t_k = k·h,
+
+1. the generator FMU of the excited axis (X or Y) and the one of the Z axis
+   (a JL move), both by ``fmi2DoStep`` / ``fmi3DoStep`` through fmpy;
+2. reads their outputs: the acceleration a of the excited axis, the position
+   and velocity (z, v_z) of Z;
+3. advances the plant (:class:`harness.plant.ScheduledPlant`) over [t_k, t_k+1]:
+   the acceleration is linear between the two communication points (exact when
+   h = Te, since the generator's jerk is constant over each sample), and each
+   mode's frequency is frozen at f(z(t_k + h/2)), with z at mid-step from the
+   cubic Hermite interpolant of (z, v_z) (exact when h = Te).
+
+No python-control object is built in the loop: a step costs two ``doStep``,
+two ``getReal`` and a few microseconds of plant arithmetic.
+
+:func:`run_scenario` is the one-call entry point: it tunes the jerk times from
+the mode map (:mod:`harness.tuning`), synchronises the Z move with the excited
+axis, co-simulates every profile and computes the metrics
+(:mod:`harness.metrics`); see :mod:`harness.results` for the tables and plots.
+
+Examples
+--------
+>>> from harness.cosim import run_scenario
+>>> result = run_scenario("X")                      # doctest: +SKIP
+>>> print(result.table())                           # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .fmu.runner import FMUError
+from .metrics import residual_peak, rise_time, settling_time
+from .planner import PROFILE_CODES, AxisFMU, MoveSamples, sync_z_velocity
+from .plant import Mode, ScheduledMode, ScheduledPlant, free_amplitude, free_response
+from .scenario import Scenario, load_scenario
+from .tuning import TuningResult, tune_djl, tune_jl
+
+__all__ = [
+    "CoSimResult",
+    "ProfileMetrics",
+    "Session",
+    "cosimulate",
+    "run_scenario",
+    "simulate",
+]
+
+
+@dataclass
+class CoSimResult:
+    """One co-simulation: the reference of both axes and the load's deflection.
+
+    Attributes
+    ----------
+    profile : str
+        ``AL``, ``JL`` or ``DJL`` (or a free label).
+    t : ndarray
+        Communication points (s).
+    x, v, a, j : ndarray
+        Reference of the excited axis (m, m/s, m/s², m/s³).
+    z, v_z : ndarray
+        Z position (m) and velocity (m/s).
+    eps : ndarray
+        Total deflection Σε (m); the load is at x + eps.
+    eps_modes : ndarray
+        Deflection of each mode, shape (n_modes, len(t)).
+    f : ndarray
+        Frequency of each mode at each communication point (Hz), shape
+        (n_modes, len(t)).
+    t_start, t_end : float
+        Start and end of the excited axis' motion (s).
+    z_t_end : float
+        End of the Z motion (s).
+    x0, target : float
+        Start and final position of the excited axis (m).
+    state_end : list of tuple
+        (ε, ε̇) of each mode at the first communication point at or after
+        ``t_end``.
+    modes_end : list of Mode
+        The modes frozen at that point.
+    N_F : tuple of int
+        Jerk times applied by the excited axis' FMU (samples).
+    Te, step : float
+        Generator sampling period and communication step (s).
+    z_v_max : float
+        Velocity limit of the Z move (m/s).
+    z_synced : bool
+        The Z move ends with the excited axis.
+    fmi_version : int
+        FMI version of the FMUs.
+    wall_time : float
+        Wall-clock time of the stepping loop (s).
+    final_state : list of float
+        Plant state at the last point (for extending the record analytically).
+    final_modes : list of Mode
+        The modes at the last point.
+    """
+
+    profile: str
+    t: np.ndarray
+    x: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    j: np.ndarray
+    z: np.ndarray
+    v_z: np.ndarray
+    eps: np.ndarray
+    eps_modes: np.ndarray
+    f: np.ndarray
+    t_start: float
+    t_end: float
+    z_t_end: float
+    x0: float
+    target: float
+    state_end: list[tuple[float, float]]
+    modes_end: list[Mode]
+    N_F: tuple[int, int, int, int]
+    Te: float
+    step: float
+    z_v_max: float = math.nan
+    z_synced: bool = True
+    fmi_version: int = 2
+    wall_time: float = 0.0
+    final_state: list[float] = field(default_factory=list)
+    final_modes: list[Mode] = field(default_factory=list)
+
+    @property
+    def motion_time(self) -> float:
+        """Duration of the excited axis' motion (s)."""
+        return self.t_end - self.t_start
+
+    @property
+    def load(self) -> np.ndarray:
+        """Load position q + Σε (m)."""
+        return self.x + self.eps
+
+    @property
+    def error(self) -> np.ndarray:
+        """Load position minus target (m)."""
+        return self.x + self.eps - self.target
+
+    @property
+    def T_F(self) -> tuple[float, ...]:
+        """Jerk times applied (s)."""
+        return tuple(n * self.Te for n in self.N_F)
+
+    @property
+    def free_amplitudes(self) -> list[float]:
+        """Amplitude of each mode's free oscillation when the reference ends (m)."""
+        return [free_amplitude(e, de, m) for (e, de), m in zip(self.state_end, self.modes_end,
+                                                                 strict=True)]
+
+    @property
+    def free_amplitude(self) -> float:
+        """Sum of the modes' free-oscillation amplitudes when the reference ends (m)."""
+        return float(sum(self.free_amplitudes))
+
+    def extend(self, duration: float) -> tuple[np.ndarray, np.ndarray]:
+        """Continue the deflection past the record, analytically.
+
+        Valid once both axes are at rest (the plant is then time-invariant and
+        free): ε(t) is the sum of the modes' free responses from the final state.
+
+        Parameters
+        ----------
+        duration : float
+            How long after the last point (s).
+
+        Returns
+        -------
+        t, eps : ndarray
+            Times after the last point (excluded) and the deflection there.
+        """
+        n = int(math.ceil(duration / self.step))
+        tau = self.step * np.arange(1, n + 1)
+        eps = np.zeros(n)
+        for i, m in enumerate(self.final_modes):
+            eps += free_response(self.final_state[2 * i], self.final_state[2 * i + 1], m, tau)
+        return self.t[-1] + tau, eps
+
+    def plot(self, title: str | None = None):
+        """Plot the reference, the deflection and the mode frequency; return the figure."""
+        from .results import plot_runs
+
+        return plot_runs({self.profile: self}, title=title or f"{self.profile} co-simulation")
+
+
+def cosimulate(
+    axis: AxisFMU,
+    z_axis: AxisFMU,
+    params: Mapping[str, Any],
+    z_params: Mapping[str, Any],
+    modes: Sequence[ScheduledMode | Mode],
+    t_stop: float,
+    step: float | None = None,
+    *,
+    profile: str = "",
+) -> CoSimResult:
+    """Step both generator FMUs and the plant together from 0 to ``t_stop``.
+
+    Parameters
+    ----------
+    axis : AxisFMU
+        FMU instance of the excited axis (re-planned here with ``params``).
+    z_axis : AxisFMU
+        FMU instance of the Z axis (re-planned with ``z_params``).
+    params, z_params : mapping
+        FMU parameters of the two moves.
+    modes : sequence of ScheduledMode or Mode
+        The plant's modes, f as a function of z.
+    t_stop : float
+        End time (s).
+    step : float, optional
+        Communication step (s), a whole multiple of ``Te``; default ``Te``.
+    profile : str
+        Label of the run.
+
+    Returns
+    -------
+    CoSimResult
+
+    Raises
+    ------
+    ValueError
+        If ``step`` is not a whole multiple of the FMUs' ``Te``.
+    FMUError
+        If an FMU call fails (with the FMU's log message).
+    """
+    T_x = axis.plan(params)
+    T_z = z_axis.plan(z_params)
+    gx, gz = axis.g, z_axis.g
+    Te = float(gx.get("Te"))
+    Te_z = float(gz.get("Te"))
+    h = Te if step is None else float(step)
+    for name, te in (("excited axis", Te), ("Z axis", Te_z)):
+        r = h / te
+        if abs(r - round(r)) > 1e-9 * max(1.0, r) or round(r) < 1:
+            raise ValueError(f"communication step {h:g} s is not a whole multiple of the "
+                             f"{name}'s Te = {te:g} s")
+    n = int(round(t_stop / h))
+    plant = ScheduledPlant(modes)
+    pstep = plant.step
+    v3x, v3z = gx.fmi_version == 3, gz.fmi_version == 3
+    getx = gx.fmu.getFloat64 if v3x else gx.fmu.getReal
+    getz = gz.fmu.getFloat64 if v3z else gz.fmu.getReal
+    stepx, stepz = gx.fmu.doStep, gz.fmu.doStep
+    vrx = gx.vr(["x", "v", "a", "j"])
+    vrz = gz.vr(["x", "v"])
+    t_start = float(gx.get("t_start"))
+    t_end = t_start + T_x
+    z_t_end = float(gz.get("t_start")) + T_z
+    k_end = min(n, int(math.ceil(t_end / h - 1e-9)))
+
+    ox = list(getx(vrx))
+    oz = list(getz(vrz))
+    X = [ox]
+    Z = [oz]
+    E = [0.0]
+    S = [tuple(plant.state)]
+    half = 0.125 * h
+    from fmpy.fmi1 import FMICallException
+
+    t0 = time.perf_counter()
+    try:
+        for k in range(n):
+            tk = k * h
+            stepx(tk, h)
+            stepz(tk, h)
+            ox1 = getx(vrx)
+            oz1 = getz(vrz)
+            zm = 0.5 * (oz[0] + oz1[0]) + half * (oz[1] - oz1[1])
+            E.append(pstep(h, ox[2], ox1[2], zm))
+            S.append(tuple(plant.state))
+            X.append(ox1)
+            Z.append(oz1)
+            ox, oz = ox1, oz1
+    except FMICallException as e:
+        raise FMUError(str(getattr(e, "function", "doStep")), int(e.status),
+                       gx.log + gz.log) from None
+    wall = time.perf_counter() - t0
+    gx.time = gz.time = n * h
+
+    t = h * np.arange(n + 1)
+    Xa = np.asarray(X, dtype=float)
+    Za = np.asarray(Z, dtype=float)
+    Sa = np.asarray(S, dtype=float)
+    nm = len(plant.modes)
+    eps_modes = Sa[:, 0::2].T.copy()
+    f = np.vstack([np.fromiter((m.f_of_z(zz) for zz in Za[:, 0].tolist()), float, n + 1)
+                   for m in plant.modes])
+    state_end = [(float(Sa[k_end, 2 * i]), float(Sa[k_end, 2 * i + 1])) for i in range(nm)]
+    modes_end = [m.at(float(Za[k_end, 0])) for m in plant.modes]
+    x0 = float(params.get("x0", gx.get("x0")))
+    dist = float(params.get("distance", gx.get("distance")))
+    return CoSimResult(
+        profile=profile, t=t, x=Xa[:, 0], v=Xa[:, 1], a=Xa[:, 2], j=Xa[:, 3],
+        z=Za[:, 0], v_z=Za[:, 1], eps=np.asarray(E), eps_modes=eps_modes, f=f,
+        t_start=t_start, t_end=t_end, z_t_end=z_t_end, x0=x0, target=x0 + dist,
+        state_end=state_end, modes_end=modes_end, N_F=axis.N_F(), Te=Te, step=h,
+        z_v_max=float(z_params.get("v_max", math.nan)), fmi_version=gx.fmi_version,
+        wall_time=wall, final_state=list(plant.state),
+        final_modes=[m.at(float(Za[-1, 0])) for m in plant.modes],
+    )
+
+
+# ------------------------------------------------------------- scenarios
+
+
+@dataclass
+class ProfileMetrics:
+    """Table 1 quantities of one profile.
+
+    Attributes
+    ----------
+    residual : float
+        Peak |ε| after the reference has ended (m).
+    free_amplitude : float
+        Amplitude of the free oscillation when the reference ends (m; sum over
+        the modes).
+    motion_time : float
+        Duration of the reference (s): the paper's "theoretical rise time".
+    rise_time : float
+        From the start until the load first reaches the target (s).
+    settling_time : float
+        From the start until the load stays within ±band of the target (s);
+        ``inf`` if it never does (undamped mode).
+    band : float
+        The settling band used (m).
+    """
+
+    residual: float
+    free_amplitude: float
+    motion_time: float
+    rise_time: float
+    settling_time: float
+    band: float
+
+
+def profile_metrics(run: CoSimResult, band: float) -> ProfileMetrics:
+    """Metrics of one run, the settling band given.
+
+    When the load is not provably settled at the end of the record (the sum of
+    the modes' free-oscillation amplitudes there exceeds the band), the record
+    is continued analytically with the free response (:meth:`CoSimResult.extend`)
+    until it is.
+    """
+    t, err = run.t, run.error
+    # the default band is a sampled value of |ε| itself: a sample at the band (to rounding)
+    # counts as inside
+    band_in = band * (1.0 + 1e-9)
+    A_final = sum(free_amplitude(run.final_state[2 * i], run.final_state[2 * i + 1], m)
+                  for i, m in enumerate(run.final_modes))
+    if A_final > band_in:
+        # time for the envelope Σ A_i e^{-σ_i τ} to fall below the band
+        need = 0.0
+        nm = len(run.final_modes)
+        for i, m in enumerate(run.final_modes):
+            Ai = free_amplitude(run.final_state[2 * i], run.final_state[2 * i + 1], m)
+            if Ai * nm > band_in:
+                need = max(need, math.inf if m.sigma == 0
+                           else math.log(Ai * nm / band_in) / m.sigma)
+        if math.isfinite(need) and need < 3600.0:
+            te, ee = run.extend(need + run.step)
+            t = np.concatenate((t, te))
+            err = np.concatenate((err, ee + (run.x[-1] - run.target)))
+            ts = settling_time(t, err, band_in, run.t_start)
+        else:
+            ts = math.inf
+    else:
+        ts = settling_time(t, err, band_in, run.t_start)
+    return ProfileMetrics(
+        residual=residual_peak(run.t, run.eps, run.t_end),
+        free_amplitude=run.free_amplitude,
+        motion_time=run.motion_time,
+        rise_time=rise_time(run.t, run.load, run.target, run.t_start, start=run.x0),
+        settling_time=ts,
+        band=band,
+    )
+
+
+class Session:
+    """The two generator FMU instances a scenario runs on (re-planned, not re-created).
+
+    Parameters
+    ----------
+    fmu : path-like, optional
+        Generator FMU file; default: the package's own FMU for ``fmi_version``.
+    fmi_version : {2, 3}
+        FMI version of the package's FMU.
+    """
+
+    def __init__(self, fmu: str | Path | None = None, fmi_version: int = 2) -> None:
+        self.fmu, self.fmi_version = fmu, fmi_version
+        self.axis = AxisFMU(fmu, fmi_version=fmi_version, name="excited_axis")
+        try:
+            self.z_axis = AxisFMU(fmu, fmi_version=fmi_version, name="z_axis")
+        except Exception:
+            self.axis.close()
+            raise
+
+    def close(self) -> None:
+        """Free both instances."""
+        self.axis.close()
+        self.z_axis.close()
+
+    def __enter__(self) -> Session:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # -------------------------------------------------------- parameters
+
+    @staticmethod
+    def move_params(sc: Scenario, profile: str,
+                    T_F: Sequence[float] | None = None) -> dict[str, Any]:
+        """FMU parameters of the excited axis for ``profile`` and jerk times ``T_F``."""
+        m, s = sc.move, sc.simulation
+        p: dict[str, Any] = {
+            "profile": PROFILE_CODES[profile], "Te": s.Te, "t_start": m.t_start, "x0": m.x0,
+            "distance": m.distance, "v_max": m.v_max, "a_max": m.a_max, "d_max": m.d_max,
+            "short_stage": s.short_stage,
+        }
+        if T_F is not None:
+            p.update({f"T_F{i + 1}": float(T_F[i]) for i in range(4)})
+        return p
+
+    @staticmethod
+    def z_move_params(sc: Scenario, v_max: float) -> dict[str, Any]:
+        """FMU parameters of the Z axis (a JL move) with velocity limit ``v_max``."""
+        z, s = sc.z, sc.simulation
+        Tf = z.T_F if z.T_F > 0 else 0.0
+        return {"profile": 2 if Tf > 0 else 1, "Te": s.Te, "t_start": sc.move.t_start,
+                "x0": z.z0, "distance": z.distance, "v_max": v_max, "a_max": z.a_max,
+                "d_max": z.a_max, "T_F1": Tf, "T_F2": Tf, "T_F3": Tf, "T_F4": Tf,
+                "short_stage": s.short_stage}
+
+    def z_velocity(self, sc: Scenario, motion_time: float) -> tuple[float, bool]:
+        """Velocity limit of the Z move: synchronised with a motion of ``motion_time``."""
+        if not sc.z.moves or not sc.z.sync:
+            return sc.z.v_max, not sc.z.moves
+        base = self.z_move_params(sc, sc.z.v_max)
+        v, _, ok = sync_z_velocity(self.z_axis, base, motion_time, sc.z.v_max)
+        return v, ok
+
+    def plan(self, sc: Scenario, profile: str
+             ) -> Callable[[tuple[float, float, float, float]],
+                           tuple[MoveSamples, Callable[[float], float]]]:
+        """Return the planning function the tuning iterates on (see :mod:`harness.tuning`)."""
+
+        def plan_fn(T_F: tuple[float, float, float, float]):
+            mv = self.axis.sample(self.move_params(sc, profile, T_F))
+            v, _ = self.z_velocity(sc, mv.motion_time)
+            zs = self.z_axis.sample(self.z_move_params(sc, v), t_stop=mv.t_end)
+            return mv, zs.position_at
+
+        return plan_fn
+
+    # ------------------------------------------------------------- runs
+
+    def tune(self, sc: Scenario, profile: str) -> TuningResult | None:
+        """Jerk times of ``profile`` from the mode map (None for AL or imposed ones)."""
+        mm, Te = sc.modemap, sc.simulation.Te
+        if profile == "JL" and sc.compare.JL_T_F is None:
+            return tune_jl(self.plan(sc, "JL"), mm.period, Te,
+                           mm.period(sc.z.z0 + sc.z.distance))
+        if profile == "DJL" and sc.compare.DJL_T_F is None:
+            return tune_djl(self.plan(sc, "DJL"), mm.period, Te, mm.period(sc.z.z0),
+                            rule=sc.compare.djl_rule)
+        return None
+
+    def run(self, sc: Scenario, profile: str, T_F: Sequence[float] | None = None,
+            t_stop: float | None = None) -> CoSimResult:
+        """Co-simulate one profile of a scenario with the given jerk times."""
+        params = self.move_params(sc, profile, T_F)
+        T_x = self.axis.plan(params)
+        v_z, synced = self.z_velocity(sc, T_x)
+        zp = self.z_move_params(sc, v_z)
+        T_z = self.z_axis.plan(zp)
+        if t_stop is None:
+            t_stop = sc.move.t_start + max(T_x, T_z) + sc.simulation.t_after
+        h = sc.simulation.step
+        t_stop = h * math.ceil(t_stop / h - 1e-9)
+        run = cosimulate(self.axis, self.z_axis, params, zp, sc.modemap.scheduled(), t_stop, h,
+                         profile=profile)
+        run.z_synced = synced
+        return run
+
+
+def _jerk_times(sc: Scenario, profile: str, tuning: TuningResult | None
+                ) -> tuple[float, float, float, float] | None:
+    if profile == "AL":
+        return None
+    if tuning is not None:
+        return tuning.T_F
+    if profile == "JL":
+        assert sc.compare.JL_T_F is not None
+        return (sc.compare.JL_T_F,) * 4
+    assert sc.compare.DJL_T_F is not None
+    return sc.compare.DJL_T_F
+
+
+def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True):
+    """Tune, co-simulate and measure every profile of a single-move scenario.
+
+    Parameters
+    ----------
+    sc : Scenario
+        A scenario without sweep (or one case of a sweep).
+    session : Session
+        The FMU instances to use.
+    keep_runs : bool
+        Keep the time series (False in sweeps, to save memory).
+
+    Returns
+    -------
+    harness.results.ScenarioResult
+    """
+    from .results import ProfileOutcome, ScenarioResult
+
+    runs: dict[str, CoSimResult] = {}
+    tunings: dict[str, TuningResult | None] = {}
+    for prof in sc.compare.profiles:
+        tunings[prof] = session.tune(sc, prof)
+        runs[prof] = session.run(sc, prof, _jerk_times(sc, prof, tunings[prof]))
+    if sc.simulation.band is not None:
+        band, source = sc.simulation.band, "given in the scenario"
+    elif "DJL" in runs:
+        band = residual_peak(runs["DJL"].t, runs["DJL"].eps, runs["DJL"].t_end)
+        source = "largest residual of DJL (the paper's band)"
+    else:
+        name = min(runs, key=lambda p: residual_peak(runs[p].t, runs[p].eps, runs[p].t_end))
+        band = residual_peak(runs[name].t, runs[name].eps, runs[name].t_end)
+        source = f"largest residual of {name} (no DJL run)"
+    if not band > 0:
+        band, source = 1e-9, source + "; zero, so 1 nm"
+    outcomes = {}
+    for prof, run in runs.items():
+        met = profile_metrics(run, band)
+        outcomes[prof] = ProfileOutcome(prof, run if keep_runs else None, tunings[prof], met,
+                                        run.T_F, run.z_v_max, run.z_synced)
+    return ScenarioResult(sc, outcomes, band, source)
+
+
+def run_scenario(scenario: Scenario | str | Path, *, fmu: str | Path | None = None,
+                 fmi_version: int | None = None, progress: bool = False,
+                 session: Session | None = None):
+    """Run a scenario: one call from a TOML file (or embedded name) to the results.
+
+    Parameters
+    ----------
+    scenario : Scenario, str or Path
+        A checked :class:`~harness.scenario.Scenario`, a TOML file, or the name of
+        an embedded scenario (``X``, ``Y``, ``sweep-X``, ``sweep-Y``).
+    fmu : path-like, optional
+        Generator FMU file, overriding the scenario's.
+    fmi_version : {2, 3}, optional
+        FMI version, overriding the scenario's.
+    progress : bool
+        Show a tqdm progress bar over the cases of a sweep (only on a TTY).
+    session : Session, optional
+        FMU instances to reuse (must match the scenario's FMU).
+
+    Returns
+    -------
+    harness.results.ScenarioResult or harness.results.SweepResult
+        ``.table()`` prints like Table 1 (Table 2 for a sweep), ``.to_csv(path)``,
+        ``.plot()`` returns the figure.
+    """
+    from .results import SweepResult
+
+    sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+    if fmu is not None or fmi_version is not None:
+        sc = sc.with_fmu(Path(fmu) if fmu is not None else None, fmi_version)
+    own = session is None
+    if session is None:
+        session = Session(sc.simulation.fmu, sc.simulation.fmi_version)
+    try:
+        if not sc.is_sweep:
+            return run_case(sc, session)
+        cases = sc.cases()
+        results = []
+        for case in _progress(cases, progress, desc=sc.name):
+            results.append(run_case(case, session, keep_runs=False))
+        return SweepResult(sc, results)
+    finally:
+        if own:
+            session.close()
+
+
+def _progress(items: list[Any], enabled: bool, desc: str):
+    import sys
+
+    if not enabled or not sys.stderr.isatty():
+        return items
+    from tqdm import tqdm
+
+    return tqdm(items, desc=desc, unit="case", leave=False)
+
+
+simulate = run_scenario
+"""Alias of :func:`run_scenario`."""

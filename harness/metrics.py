@@ -1,0 +1,240 @@
+"""Performance metrics of a positioning move, on plain arrays.
+
+The quantities of Table 1 and Table 2 of Béarée & Olabi 2013 (§4):
+
+* residual vibration — peak |ε| after the reference has ended
+  (:func:`residual_peak`); the amplitude of the free oscillation at that instant
+  is :func:`harness.plant.free_amplitude`;
+* settling time — from the start of the motion until the load enters, and stays
+  in, a band around the target (:func:`settling_time`); the paper's band is the
+  largest residual vibration of the DJL profile;
+* motion time — the reference's duration, the paper's "theoretical rise time"
+  (:func:`motion_time`);
+* rise time — from the start until the load first reaches the target
+  (:func:`rise_time`);
+* Table 2 statistics of one profile against another (:func:`change_percent`,
+  :func:`table2_stats`).
+
+Crossing times are interpolated linearly between samples.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "Table2Stats",
+    "change_percent",
+    "motion_time",
+    "percent_of",
+    "residual_peak",
+    "rise_time",
+    "settling_time",
+    "table2_stats",
+]
+
+
+def _check(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    t = np.asarray(t, dtype=float)
+    y = np.asarray(y, dtype=float)
+    if t.ndim != 1 or t.shape != y.shape or t.size < 2:
+        raise ValueError("t and the signal must be 1-D arrays of the same length (>= 2)")
+    return t, y
+
+
+def residual_peak(t: np.ndarray, eps: np.ndarray, t_end: float) -> float:
+    """Largest |ε| at or after the end of the reference.
+
+    Parameters
+    ----------
+    t : ndarray
+        Sample times (s).
+    eps : ndarray
+        Deflection (m).
+    t_end : float
+        End of the reference motion (s).
+
+    Returns
+    -------
+    float
+        max |ε(t)| for t ≥ t_end (m); NaN if no sample is at or after t_end.
+    """
+    t, eps = _check(t, eps)
+    sel = t >= t_end - 1e-9 * max(1.0, abs(t_end))
+    if not sel.any():
+        return math.nan
+    return float(np.max(np.abs(eps[sel])))
+
+
+def settling_time(t: np.ndarray, error: np.ndarray, band: float, t_start: float = 0.0) -> float:
+    """Time from ``t_start`` until |error| enters the band for good.
+
+    Parameters
+    ----------
+    t : ndarray
+        Sample times (s).
+    error : ndarray
+        Load position minus target (m).
+    band : float
+        Half-width of the band (m), > 0.
+    t_start : float
+        Start of the motion (s).
+
+    Returns
+    -------
+    float
+        Settling time (s), measured from ``t_start``; the last exit is located
+        by linear interpolation between samples.  0 if the error stays in the
+        band from ``t_start`` on; NaN if it is still outside at the last sample
+        (not settled within the record).
+    """
+    t, error = _check(t, error)
+    if not band > 0:
+        raise ValueError(f"band must be > 0, got {band!r}")
+    sel = t >= t_start - 1e-12
+    tt, ee = t[sel], np.abs(error[sel])
+    out = np.flatnonzero(ee > band)
+    if out.size == 0:
+        return 0.0
+    k = int(out[-1])
+    if k == tt.size - 1:
+        return math.nan
+    # |e| crosses the band between samples k (outside) and k + 1 (inside)
+    e0, e1 = ee[k], ee[k + 1]
+    frac = (e0 - band) / (e0 - e1) if e0 != e1 else 1.0
+    return float(tt[k] + frac * (tt[k + 1] - tt[k]) - t_start)
+
+
+def rise_time(t: np.ndarray, position: np.ndarray, target: float, t_start: float = 0.0,
+              start: float | None = None) -> float:
+    """Time from ``t_start`` until the load first reaches the target position.
+
+    Parameters
+    ----------
+    t : ndarray
+        Sample times (s).
+    position : ndarray
+        Load position q + ε (m).
+    target : float
+        Target position (m).
+    t_start : float
+        Start of the motion (s).
+    start : float, optional
+        Start position (default: the position at ``t_start``); gives the
+        direction of the move.
+
+    Returns
+    -------
+    float
+        Rise time (s), interpolated linearly between samples; NaN if the target
+        is never reached.
+    """
+    t, position = _check(t, position)
+    sel = t >= t_start - 1e-12
+    tt, pp = t[sel], position[sel]
+    x0 = float(pp[0]) if start is None else float(start)
+    sgn = 1.0 if target >= x0 else -1.0
+    s = sgn * (pp - target)  # < 0 before the target, >= 0 once reached
+    hit = np.flatnonzero(s >= 0.0)
+    if hit.size == 0:
+        return math.nan
+    k = int(hit[0])
+    if k == 0:
+        return float(tt[0] - t_start)
+    s0, s1 = s[k - 1], s[k]
+    frac = -s0 / (s1 - s0)
+    return float(tt[k - 1] + frac * (tt[k] - tt[k - 1]) - t_start)
+
+
+def motion_time(t: np.ndarray, x_ref: np.ndarray, v_ref: np.ndarray, t_start: float = 0.0,
+                tol: float = 1e-9) -> float:
+    """Duration of a reference motion: until it rests at its final position.
+
+    Parameters
+    ----------
+    t : ndarray
+        Sample times (s).
+    x_ref, v_ref : ndarray
+        Reference position (m) and velocity (m/s).
+    t_start : float
+        Start of the motion (s).
+    tol : float
+        Tolerance on position (m) and velocity (m/s).
+
+    Returns
+    -------
+    float
+        Time from ``t_start`` to the first sample after which the reference
+        stays at its last position with zero velocity (s); NaN if it is still
+        moving at the last sample.
+    """
+    t, x_ref = _check(t, x_ref)
+    v_ref = np.asarray(v_ref, dtype=float)
+    moving = (np.abs(x_ref - x_ref[-1]) > tol) | (np.abs(v_ref) > tol)
+    idx = np.flatnonzero(moving)
+    if idx.size == 0:
+        return 0.0
+    k = int(idx[-1])
+    if k == t.size - 1:
+        return math.nan
+    return float(t[k + 1] - t_start)
+
+
+def percent_of(value: float, reference: float) -> float:
+    """``value`` as a percentage of ``reference`` (Table 1: "% of AL")."""
+    return 100.0 * value / reference if reference else math.nan
+
+
+def change_percent(value: float, reference: float) -> float:
+    """Relative change in % (Table 2: DJL "in % as compared to JL", negative = better)."""
+    return 100.0 * (value - reference) / reference if reference else math.nan
+
+
+@dataclass
+class Table2Stats:
+    """Statistics of relative changes, as in Table 2 of the paper.
+
+    Attributes
+    ----------
+    mean : float
+        Mean change (%).
+    max : float
+        Largest reduction, i.e. the most negative change (%): the paper's "Max".
+    min : float
+        Smallest reduction, i.e. the least negative change (%): the paper's "Min".
+    std : float
+        Sample standard deviation (%), ddof = 1.
+    n : int
+        Number of cases.
+    """
+
+    mean: float
+    max: float
+    min: float
+    std: float
+    n: int
+
+
+def table2_stats(changes: Sequence[float] | np.ndarray) -> Table2Stats:
+    """Mean, largest / smallest reduction and standard deviation of changes in %.
+
+    Parameters
+    ----------
+    changes : sequence of float
+        Relative changes in % (e.g. :func:`change_percent` of DJL vs JL); NaNs
+        are ignored.
+
+    Returns
+    -------
+    Table2Stats
+    """
+    c = np.asarray(changes, dtype=float)
+    c = c[np.isfinite(c)]
+    if c.size == 0:
+        return Table2Stats(math.nan, math.nan, math.nan, math.nan, 0)
+    std = float(np.std(c, ddof=1)) if c.size > 1 else 0.0
+    return Table2Stats(float(np.mean(c)), float(np.min(c)), float(np.max(c)), std, int(c.size))

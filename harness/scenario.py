@@ -1,0 +1,603 @@
+"""Scenario files (TOML): the moves, the mode map and the profiles to compare.
+
+A scenario is checked completely when it is loaded — unknown keys, missing or
+out-of-range values, a lookup table that does not cover the motion, a
+communication step that is not a multiple of ``Te``, an FMU file without the
+generator's variables — and every problem is reported as
+:class:`ScenarioError` naming the file, the key and the value, before anything
+is simulated.
+
+Format (all lengths in m, times in s, frequencies in Hz)::
+
+    name = "X"                      # default: the file name
+    description = "..."
+
+    [simulation]                    # optional, defaults shown
+    Te = 0.001                      # generator sampling period
+    step = 0.001                    # communication step, a whole multiple of Te
+    t_after = 3.0                   # simulated time after both axes have stopped
+    fmi_version = 2                 # 2 or 3 (the package's own FMU)
+    fmu = "my_generator.fmu"        # or a generator FMU file (relative to this file)
+    band = 0.0005                   # settling band; default: largest residual of DJL
+    short_stage = 2                 # FMU rule for short stages (2 = the paper's)
+
+    [move]                          # the excited axis (X or Y)
+    axis = "X"                      # label
+    distance = 0.4                  # required, signed
+    v_max = 0.5                     # required
+    a_max = 4.0                     # required
+    d_max = 4.0                     # default: a_max
+    x0 = 0.0
+    t_start = 0.0
+
+    [z]                             # optional: the Z axis, a JL move
+    z0 = 0.0                        # start position (the only key needed for a still Z)
+    distance = 0.45                 # default 0 (Z does not move)
+    a_max = 2.0
+    v_max = 1.0                     # velocity limit
+    T_F = 0.05                      # JL jerk time
+    sync = true                     # lower v_max so that Z ends with the excited axis
+
+    [[mode]]                        # one table per mode, at least one
+    name = "first X mode"
+    zeta = 0.03                     # required, in [0, 1)
+    law = "linear"                  # "linear" | "table" | "cantilever" | "constant"
+    z = [0.0, 0.5]                  # linear: two positions; table: increasing positions
+    f = [8.5, 6.375]                # linear/table: frequencies; constant: one number
+    # cantilever: f_ref, L_ref, z_ref (default 0), direction (+1/-1, default +1)
+    gain = 1.0                      # participation factor
+    mass_ratio = 1.0                # load mass / mass of the survey (f / sqrt(ratio))
+
+    [compare]                       # optional
+    profiles = ["AL", "JL", "DJL"]
+    tune_mode = 1                   # mode (1-based) the jerk times are tuned to
+    djl_rule = "start"              # "start" (paper) or "phase"
+    JL_T_F = 0.15                   # optional: impose the JL jerk time
+    DJL_T_F = [0.12, 0.13, 0.14, 0.15]   # optional: impose the DJL jerk times
+
+    [sweep]                         # optional: run the grid of all combinations
+    distance = [0.1, 0.2, 0.3]      # replaces move.distance
+    z_distance = [0.1, 0.3, 0.5]    # replaces z.distance
+    v_max = [0.5, 2.0]              # replaces move.v_max
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+import sys
+from collections.abc import Mapping
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+from .modemap import CantileverLaw, ConstantLaw, LinearLaw, ModeMap, ModeSpec, TableLaw
+from .tuning import RULES
+
+__all__ = [
+    "CompareSpec",
+    "MoveSpec",
+    "Scenario",
+    "ScenarioError",
+    "SimulationSpec",
+    "SweepSpec",
+    "ZSpec",
+    "embedded_scenarios",
+    "load_scenario",
+    "parse_scenario",
+]
+
+PROFILES = ("AL", "JL", "DJL")
+_MISSING = object()
+
+
+class ScenarioError(ValueError):
+    """A scenario that cannot be run: names the file, the key and the value.
+
+    Attributes
+    ----------
+    source : str
+        The scenario file (or ``<string>``).
+    key : str
+        Dotted key, e.g. ``mode[1].zeta`` (empty for file-level problems).
+    value : Any
+        The offending value (``None`` when missing).
+    problem : str
+        What is wrong.
+    """
+
+    def __init__(self, source: str, key: str, value: Any, problem: str) -> None:
+        self.source, self.key, self.value, self.problem = source, key, value, problem
+        if not key:
+            msg = f"{source}: {problem}"
+        elif value is _MISSING or value is None:
+            msg = f"{source}: {key} is missing: {problem}"
+        else:
+            msg = f"{source}: {key} = {value!r}: {problem}"
+        super().__init__(msg)
+
+
+# ----------------------------------------------------------------- specs
+
+
+@dataclass(frozen=True)
+class SimulationSpec:
+    """``[simulation]``: sampling, window, FMU and settling band."""
+
+    Te: float = 1e-3
+    step: float = 1e-3
+    t_after: float = 3.0
+    fmi_version: int = 2
+    fmu: Path | None = None
+    band: float | None = None
+    short_stage: int = 2
+
+
+@dataclass(frozen=True)
+class MoveSpec:
+    """``[move]``: the excited axis."""
+
+    distance: float
+    v_max: float
+    a_max: float
+    d_max: float
+    axis: str = "X"
+    x0: float = 0.0
+    t_start: float = 0.0
+
+    @property
+    def target(self) -> float:
+        """Final position (m)."""
+        return self.x0 + self.distance
+
+
+@dataclass(frozen=True)
+class ZSpec:
+    """``[z]``: the Z axis, a JL move (or still)."""
+
+    z0: float = 0.0
+    distance: float = 0.0
+    a_max: float = 2.0
+    v_max: float = 1.0
+    T_F: float = 0.05
+    sync: bool = True
+
+    @property
+    def moves(self) -> bool:
+        """True if Z moves."""
+        return self.distance != 0.0
+
+    @property
+    def z_range(self) -> tuple[float, float]:
+        """Positions covered (m)."""
+        z1 = self.z0 + self.distance
+        return (min(self.z0, z1), max(self.z0, z1))
+
+
+@dataclass(frozen=True)
+class CompareSpec:
+    """``[compare]``: profiles and their jerk times."""
+
+    profiles: tuple[str, ...] = PROFILES
+    djl_rule: str = "start"
+    JL_T_F: float | None = None
+    DJL_T_F: tuple[float, float, float, float] | None = None
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """``[sweep]``: lists of values whose combinations are run."""
+
+    distance: tuple[float, ...] | None = None
+    z_distance: tuple[float, ...] | None = None
+    v_max: tuple[float, ...] | None = None
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A checked scenario.
+
+    Use :func:`load_scenario` (file or embedded name) or :func:`parse_scenario`.
+    Run it with :func:`harness.cosim.run_scenario`.
+    """
+
+    name: str
+    move: MoveSpec
+    z: ZSpec
+    modemap: ModeMap
+    simulation: SimulationSpec = SimulationSpec()
+    compare: CompareSpec = CompareSpec()
+    sweep: SweepSpec | None = None
+    description: str = ""
+    source: str = "<string>"
+
+    @property
+    def is_sweep(self) -> bool:
+        """True when the scenario has a ``[sweep]`` table."""
+        return self.sweep is not None
+
+    def cases(self) -> list[Scenario]:
+        """Return the single-move scenarios of a sweep (itself when not a sweep)."""
+        if self.sweep is None:
+            return [self]
+        sw = self.sweep
+        out = []
+        for d, dz, v in itertools.product(sw.distance or (self.move.distance,),
+                                          sw.z_distance or (self.z.distance,),
+                                          sw.v_max or (self.move.v_max,)):
+            mv = dataclasses.replace(self.move, distance=d, v_max=v)
+            zz = dataclasses.replace(self.z, distance=dz)
+            out.append(dataclasses.replace(
+                self, move=mv, z=zz, sweep=None,
+                name=f"{self.name} d={d:g} dz={dz:g} v={v:g}"))
+        return out
+
+    def with_fmu(self, fmu: Path | None = None, fmi_version: int | None = None) -> Scenario:
+        """Copy with another FMU file and/or FMI version (command-line overrides)."""
+        sim = self.simulation
+        if fmu is not None:
+            _check_fmu(self.source, "simulation.fmu", Path(fmu))
+            sim = dataclasses.replace(sim, fmu=Path(fmu))
+        if fmi_version is not None:
+            if fmi_version not in (2, 3):
+                raise ScenarioError(self.source, "simulation.fmi_version", fmi_version,
+                                    "must be 2 or 3")
+            sim = dataclasses.replace(sim, fmi_version=fmi_version)
+        return dataclasses.replace(self, simulation=sim)
+
+
+# --------------------------------------------------------------- parsing
+
+
+class _Table:
+    """Reads one TOML table, remembering which keys were used."""
+
+    def __init__(self, source: str, prefix: str, data: Any) -> None:
+        self.source, self.prefix = source, prefix
+        if not isinstance(data, Mapping):
+            raise ScenarioError(source, prefix, data, "must be a table")
+        self.data = dict(data)
+        self.used: set[str] = set()
+
+    def key(self, k: str) -> str:
+        return f"{self.prefix}.{k}" if self.prefix else k
+
+    def err(self, k: str, value: Any, problem: str) -> ScenarioError:
+        return ScenarioError(self.source, self.key(k), value, problem)
+
+    def raw(self, k: str, default: Any = _MISSING, what: str = "") -> Any:
+        self.used.add(k)
+        if k in self.data:
+            return self.data[k]
+        if default is _MISSING:
+            raise self.err(k, _MISSING, what or "required")
+        return default
+
+    def number(self, k: str, default: Any = _MISSING, *, what: str = "", positive: bool = False,
+               nonneg: bool = False, nonzero: bool = False) -> Any:
+        v = self.raw(k, default, what)
+        if k not in self.data:
+            return v
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise self.err(k, v, "must be a finite number" + (f" ({what})" if what else ""))
+        v = float(v)
+        if positive and not v > 0:
+            raise self.err(k, v, "must be > 0" + (f" ({what})" if what else ""))
+        if nonneg and not v >= 0:
+            raise self.err(k, v, "must be >= 0" + (f" ({what})" if what else ""))
+        if nonzero and v == 0:
+            raise self.err(k, v, "must not be 0" + (f" ({what})" if what else ""))
+        return v
+
+    def numbers(self, k: str, default: Any = _MISSING, *, what: str = "", min_len: int = 1
+                ) -> Any:
+        v = self.raw(k, default, what)
+        if k not in self.data:
+            return v
+        if not isinstance(v, list) or len(v) < min_len or any(
+                isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x)
+                for x in v):
+            raise self.err(k, v, f"must be a list of at least {min_len} finite number(s)"
+                           + (f" ({what})" if what else ""))
+        return tuple(float(x) for x in v)
+
+    def string(self, k: str, default: Any = _MISSING, *, choices: tuple[str, ...] | None = None
+               ) -> Any:
+        v = self.raw(k, default)
+        if k not in self.data:
+            return v
+        if not isinstance(v, str):
+            raise self.err(k, v, "must be a string")
+        if choices is not None and v not in choices:
+            raise self.err(k, v, f"must be one of {', '.join(choices)}")
+        return v
+
+    def boolean(self, k: str, default: Any = _MISSING) -> Any:
+        v = self.raw(k, default)
+        if k not in self.data:
+            return v
+        if not isinstance(v, bool):
+            raise self.err(k, v, "must be true or false")
+        return v
+
+    def integer(self, k: str, default: Any = _MISSING, choices: tuple[int, ...] | None = None
+                ) -> Any:
+        v = self.raw(k, default)
+        if k not in self.data:
+            return v
+        if isinstance(v, bool) or not isinstance(v, int):
+            raise self.err(k, v, "must be an integer")
+        if choices is not None and v not in choices:
+            raise self.err(k, v, f"must be one of {', '.join(map(str, choices))}")
+        return v
+
+    def finish(self) -> None:
+        unknown = [k for k in self.data if k not in self.used]
+        if unknown:
+            k = unknown[0]
+            raise self.err(k, self.data[k], f"unknown key (known: {', '.join(sorted(self.used))})")
+
+
+def _check_fmu(source: str, key: str, path: Path) -> None:
+    from .planner import check_fmu_variables
+
+    if not path.is_file():
+        raise ScenarioError(source, key, str(path), "no such FMU file")
+    try:
+        missing = check_fmu_variables(path)
+    except ValueError as e:
+        raise ScenarioError(source, key, str(path), str(e)) from None
+    if missing:
+        raise ScenarioError(source, key, str(path),
+                            "the FMU lacks the generator variables " + ", ".join(missing))
+
+
+def _parse_mode(source: str, i: int, data: Any) -> ModeSpec:
+    t = _Table(source, f"mode[{i}]", data)
+    name = t.string("name", f"mode {i}")
+    zeta = t.number("zeta", what="damping ratio in [0, 1)")
+    if not 0.0 <= zeta < 1.0:
+        raise t.err("zeta", zeta, "damping ratio must be in [0, 1)")
+    law_name = t.string("law", choices=("linear", "table", "cantilever", "constant"))
+    law: Any
+    if law_name == "constant":
+        f = t.number("f", what="frequency in Hz")
+        if not f > 0:
+            raise t.err("f", f, "frequency must be > 0 Hz")
+        law = ConstantLaw(f)
+    elif law_name in ("linear", "table"):
+        z = t.numbers("z", what="positions in m", min_len=2)
+        f = t.numbers("f", what="frequencies in Hz", min_len=2)
+        bad = [x for x in f if not x > 0]
+        if bad:
+            raise t.err("f", list(f), f"frequencies must be > 0 Hz (got {bad[0]:g})")
+        if len(z) != len(f):
+            raise t.err("f", list(f), f"needs as many values as z ({len(z)})")
+        if law_name == "linear":
+            if len(z) != 2:
+                raise t.err("z", list(z), "a linear law takes exactly two positions")
+            if z[0] == z[1]:
+                raise t.err("z", list(z), "the two positions must differ")
+            law = LinearLaw((z[0], z[1]), (f[0], f[1]))
+        else:
+            if any(b <= a for a, b in zip(z, z[1:], strict=False)):
+                raise t.err("z", list(z), "table positions must be strictly increasing")
+            law = TableLaw(z, f)
+    else:
+        f_ref = t.number("f_ref", what="frequency in Hz at z_ref")
+        if not f_ref > 0:
+            raise t.err("f_ref", f_ref, "frequency must be > 0 Hz")
+        L_ref = t.number("L_ref", positive=True, what="overhanging length in m at z_ref")
+        z_ref = t.number("z_ref", 0.0)
+        direction = t.integer("direction", 1, choices=(1, -1))
+        law = CantileverLaw(f_ref, L_ref, z_ref, direction)
+    gain = t.number("gain", 1.0, nonzero=True)
+    mass_ratio = t.number("mass_ratio", 1.0, positive=True,
+                          what="load mass / mass of the modal survey")
+    t.finish()
+    return ModeSpec(law, zeta, gain, mass_ratio, name)
+
+
+def parse_scenario(data: Mapping[str, Any], source: str = "<string>",
+                   base_dir: Path | None = None) -> Scenario:
+    """Check a scenario given as a dict (parsed TOML).
+
+    Parameters
+    ----------
+    data : mapping
+        The TOML document.
+    source : str
+        Name used in error messages (the file).
+    base_dir : Path, optional
+        Directory against which a relative ``simulation.fmu`` is resolved.
+
+    Returns
+    -------
+    Scenario
+
+    Raises
+    ------
+    ScenarioError
+        On the first problem found.
+    """
+    top = _Table(source, "", data)
+    name = top.string("name", Path(source).stem if source != "<string>" else "scenario")
+    description = top.string("description", "")
+
+    # [simulation]
+    s = _Table(source, "simulation", top.raw("simulation", {}))
+    Te = s.number("Te", 1e-3, positive=True, what="generator sampling period in s")
+    step = s.number("step", Te, positive=True, what="communication step in s")
+    ratio = step / Te
+    if abs(ratio - round(ratio)) > 1e-9 * max(1.0, ratio) or round(ratio) < 1:
+        raise s.err("step", step, f"must be a whole multiple of Te = {Te:g} s")
+    t_after = s.number("t_after", 3.0, nonneg=True, what="s after the motion")
+    fmi_version = s.integer("fmi_version", 2, choices=(2, 3))
+    fmu_raw = s.string("fmu", "")
+    fmu = None
+    if fmu_raw:
+        fmu = Path(fmu_raw)
+        if not fmu.is_absolute() and base_dir is not None:
+            fmu = base_dir / fmu
+        _check_fmu(source, "simulation.fmu", fmu)
+    band = s.number("band", None, positive=True, what="settling band in m")
+    short_stage = s.integer("short_stage", 2, choices=(1, 2))
+    s.finish()
+    sim = SimulationSpec(Te, step, t_after, fmi_version, fmu, band, short_stage)
+
+    # [move]
+    m = _Table(source, "move", top.raw("move", what="the excited axis' move ([move] table)"))
+    distance = m.number("distance", what="signed move length in m", nonzero=True)
+    v_max = m.number("v_max", what="velocity limit in m/s", positive=True)
+    a_max = m.number("a_max", what="acceleration limit in m/s2", positive=True)
+    d_max = m.number("d_max", a_max, positive=True, what="deceleration limit in m/s2")
+    axis = m.string("axis", "X")
+    x0 = m.number("x0", 0.0)
+    t_start = m.number("t_start", 0.0, nonneg=True)
+    m.finish()
+    move = MoveSpec(distance, v_max, a_max, d_max, axis, x0, t_start)
+
+    # [z]
+    zt = _Table(source, "z", top.raw("z", {}))
+    z = ZSpec(
+        z0=zt.number("z0", 0.0),
+        distance=zt.number("distance", 0.0),
+        a_max=zt.number("a_max", 2.0, positive=True, what="m/s2"),
+        v_max=zt.number("v_max", 1.0, positive=True, what="m/s"),
+        T_F=zt.number("T_F", 0.05, nonneg=True, what="JL jerk time in s"),
+        sync=zt.boolean("sync", True),
+    )
+    zt.finish()
+
+    # [[mode]]
+    modes_raw = top.raw("mode", what="at least one [[mode]] table")
+    if not isinstance(modes_raw, list) or not modes_raw:
+        raise ScenarioError(source, "mode", modes_raw, "needs at least one [[mode]] table")
+    modes = tuple(_parse_mode(source, i + 1, md) for i, md in enumerate(modes_raw))
+
+    # [compare]
+    c = _Table(source, "compare", top.raw("compare", {}))
+    profiles = c.raw("profiles", list(PROFILES))
+    if (not isinstance(profiles, list) or not profiles
+            or any(p not in PROFILES for p in profiles) or len(set(profiles)) != len(profiles)):
+        raise c.err("profiles", profiles, f"must be a non-empty list of distinct names among "
+                    f"{', '.join(PROFILES)}")
+    tune_mode = c.integer("tune_mode", 1)
+    if not 1 <= tune_mode <= len(modes):
+        raise c.err("tune_mode", tune_mode, f"must be between 1 and {len(modes)} (the modes)")
+    djl_rule = c.string("djl_rule", "start", choices=RULES)
+    JL_T_F = c.number("JL_T_F", None, positive=True, what="JL jerk time in s")
+    DJL_T_F = c.numbers("DJL_T_F", None, what="four DJL jerk times in s", min_len=4)
+    if DJL_T_F is not None and (len(DJL_T_F) != 4 or not all(x > 0 for x in DJL_T_F)):
+        raise c.err("DJL_T_F", list(DJL_T_F), "must hold four jerk times > 0 s")
+    c.finish()
+    compare = CompareSpec(tuple(profiles), djl_rule, JL_T_F, DJL_T_F)
+
+    # [sweep]
+    sweep = None
+    if "sweep" in top.data:
+        w = _Table(source, "sweep", top.raw("sweep"))
+        sd = w.numbers("distance", None, what="move lengths in m")
+        sz = w.numbers("z_distance", None, what="Z move lengths in m")
+        sv = w.numbers("v_max", None, what="velocity limits in m/s")
+        w.finish()
+        if sd and any(x == 0 for x in sd):
+            raise w.err("distance", list(sd), "move lengths must not be 0")
+        if sv and any(not x > 0 for x in sv):
+            raise w.err("v_max", list(sv), "velocity limits must be > 0")
+        if not (sd or sz or sv):
+            raise ScenarioError(source, "sweep", {}, "give at least one of distance, "
+                                "z_distance, v_max")
+        sweep = SweepSpec(sd, sz, sv)
+    top.finish()
+
+    scen = Scenario(name, move, z, ModeMap(modes, tune_mode - 1), sim, compare, sweep,
+                    description, source)
+    # the mode laws must be valid wherever Z goes, in every case
+    for case in scen.cases():
+        z_min, z_max = case.z.z_range
+        for i, md in enumerate(modes):
+            try:
+                md.check_range(z_min, z_max)
+            except ValueError as e:
+                key = f"mode[{i + 1}]." + ("z" if md.law.kind == "table" else
+                                           "L_ref" if md.law.kind == "cantilever" else "f")
+                raise ScenarioError(source, key, _law_value(md), f"{e} (Z moves from "
+                                    f"{case.z.z0:g} m by {case.z.distance:g} m)") from None
+    return scen
+
+
+def _law_value(md: ModeSpec) -> Any:
+    law = md.law
+    if isinstance(law, TableLaw):
+        return list(law.z)
+    if isinstance(law, CantileverLaw):
+        return law.L_ref
+    if isinstance(law, LinearLaw):
+        return list(law.f)
+    return law.f
+
+
+# ---------------------------------------------------------------- loading
+
+_PACKAGE = "harness.scenarios"
+
+
+def embedded_scenarios() -> dict[str, str]:
+    """Names of the scenarios shipped with the package → their description."""
+    out = {}
+    for entry in sorted(resources.files(_PACKAGE).iterdir(), key=lambda p: p.name):
+        if entry.name.endswith(".toml"):
+            data = tomllib.loads(entry.read_text(encoding="utf-8"))
+            out[data.get("name", entry.name[:-5])] = data.get("description", "")
+    return out
+
+
+DEFAULT_SCENARIOS = ("X", "Y", "sweep-X", "sweep-Y")
+"""Embedded scenarios run by ``djl-fmu simulate`` without arguments."""
+
+
+def load_scenario(spec: str | Path) -> Scenario:
+    """Load and check a scenario: a TOML file, or the name of an embedded one.
+
+    Parameters
+    ----------
+    spec : str or Path
+        Path to a ``.toml`` file, or an embedded scenario name (see
+        :func:`embedded_scenarios`: ``X``, ``Y``, ``sweep-X``, ``sweep-Y``).
+
+    Returns
+    -------
+    Scenario
+
+    Raises
+    ------
+    ScenarioError
+        If the file is missing, is not valid TOML, or fails a check.
+    """
+    path = Path(spec)
+    if path.is_file():
+        try:
+            text = path.read_text(encoding="utf-8")
+        except OSError as e:
+            raise ScenarioError(str(path), "", None, f"cannot read: {e}") from None
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as e:
+            raise ScenarioError(str(path), "", None, f"not valid TOML: {e}") from None
+        return parse_scenario(data, str(path), path.parent)
+    for entry in resources.files(_PACKAGE).iterdir():
+        if entry.name.endswith(".toml"):
+            data = tomllib.loads(entry.read_text(encoding="utf-8"))
+            if str(data.get("name", "")).lower() == str(spec).lower():
+                return parse_scenario(data, f"<embedded {data['name']}>")
+    names = ", ".join(embedded_scenarios())
+    raise ScenarioError(str(spec), "", None,
+                        f"no such scenario file, and not an embedded scenario ({names})")

@@ -1,0 +1,4 @@
+"""Embedded default scenarios (TOML), run by ``djl-fmu simulate`` with no file given.
+
+See ``docs/harness.md`` for how their numbers were chosen.
+"""

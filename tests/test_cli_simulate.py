@@ -1,0 +1,123 @@
+"""``djl-fmu simulate``: help, listing, a run with its outputs, and refusals."""
+
+from __future__ import annotations
+
+import csv
+import shutil
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from harness.cli import main
+
+SCENARIO = """\
+name = "cli-test"
+
+[simulation]
+t_after = 0.5
+
+[move]
+distance = 0.3
+v_max = 2.0
+a_max = 4.0
+
+[z]
+distance = 0.3
+a_max = 8.0
+v_max = 2.0
+
+[[mode]]
+zeta = 0.04
+law = "linear"
+z = [0.0, 0.5]
+f = [10.5, 7.035]
+"""
+
+
+def test_help_explains_inputs_outputs_and_defaults(capsys):
+    with pytest.raises(SystemExit) as ei:
+        main(["simulate", "--help"])
+    assert ei.value.code == 0
+    out = capsys.readouterr().out
+    for word in ("SCENARIO", "TOML", "sweep-X", "--out", "djl-fmu-out/simulate", ".csv", ".png",
+                 "--fmi-version", "--fmu", "Exit status"):
+        assert word in out
+
+
+def test_list_embedded(capsys):
+    assert main(["simulate", "--list"]) == 0
+    out = capsys.readouterr().out
+    for name in ("X", "Y", "sweep-X", "sweep-Y"):
+        assert name in out
+
+
+def test_run_writes_table_csv_and_plot(tmp_path, capsys, fmu2):
+    scen = tmp_path / "s.toml"
+    scen.write_text(SCENARIO)
+    out = tmp_path / "out"
+    rc = main(["simulate", str(scen), "--fmu", str(fmu2), "-o", str(out)])
+    assert rc == 0
+    text = capsys.readouterr().out
+    assert "Residual vibration [mm]" in text and "DJL compared with JL" in text
+    assert sorted(p.name for p in out.iterdir()) == ["cli-test.csv", "cli-test.png",
+                                                     "summary.txt"]
+    rows = list(csv.DictReader((out / "cli-test.csv").open()))
+    assert [r["profile"] for r in rows] == ["AL", "JL", "DJL"]
+    assert float(rows[0]["residual_pct_of_AL"]) == pytest.approx(100.0)
+    assert (out / "cli-test.png").read_bytes()[:4] == b"\x89PNG"
+    assert "Residual vibration" in (out / "summary.txt").read_text()
+
+
+def test_fmi3_option(tmp_path, capsys, fmu3):
+    scen = tmp_path / "s.toml"
+    scen.write_text(SCENARIO)
+    rc = main(["simulate", str(scen), "--fmu", str(fmu3), "-o", str(tmp_path / "o"),
+               "--no-plot", "-q"])
+    assert rc == 0
+    assert "FMU " + str(fmu3) in (tmp_path / "o" / "summary.txt").read_text()
+    assert not (tmp_path / "o" / "cli-test.png").exists()
+
+
+def test_bad_scenario_exits_non_zero_and_writes_nothing(tmp_path, capsys):
+    good = tmp_path / "good.toml"
+    good.write_text(SCENARIO)
+    bad = tmp_path / "bad.toml"
+    bad.write_text(SCENARIO.replace("zeta = 0.04", "zeta = 1.5"))
+    out = tmp_path / "out"
+    # the bad file comes second: the good one must not have been run or written either
+    rc = main(["simulate", str(good), str(bad), "-o", str(out)])
+    assert rc == 2
+    err = capsys.readouterr().err
+    assert str(bad) in err and "mode[1].zeta" in err and "1.5" in err
+    assert not out.exists()
+    assert main(["simulate", "no-such-scenario", "-o", str(out)]) == 2
+    assert "no such scenario" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_fmu_without_the_variables_is_refused(tmp_path, capsys, fmu2):
+    bad = tmp_path / "bad.fmu"
+    with zipfile.ZipFile(fmu2) as zin, zipfile.ZipFile(bad, "w") as zout:
+        for item in zin.infolist():
+            data = zin.read(item.filename)
+            if item.filename == "modelDescription.xml":
+                data = data.replace(b'name="motion_time"', b'name="duration"')
+            zout.writestr(item, data)
+    scen = tmp_path / "s.toml"
+    scen.write_text(SCENARIO)
+    out = tmp_path / "out"
+    assert main(["simulate", str(scen), "--fmu", str(bad), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "simulation.fmu" in err and str(bad) in err and "motion_time" in err
+    assert not out.exists()
+    notfmu = tmp_path / "x.fmu"
+    shutil.copy(scen, notfmu)
+    assert main(["simulate", str(scen), "--fmu", str(notfmu), "-o", str(out)]) == 2
+    assert "cannot read" in capsys.readouterr().err
+
+
+def test_embedded_name_runs(tmp_path, capsys, fmu2):
+    rc = main(["simulate", "Y", "--fmu", str(fmu2), "-o", str(tmp_path), "-q", "--no-plot"])
+    assert rc == 0
+    assert Path(tmp_path / "Y.csv").exists()

@@ -1,0 +1,227 @@
+"""The co-simulation master: two generator FMUs (FMI 2 and 3) and the scheduled plant."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import shutil
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.interpolate import CubicHermiteSpline
+
+from harness.cosim import Session, cosimulate, profile_metrics, run_scenario
+from harness.fmu.runner import generate
+from harness.metrics import residual_peak, settling_time
+from harness.modemap import ConstantLaw, ModeMap, ModeSpec
+from harness.plant import Mode, free_amplitude
+from harness.results import ScenarioResult, SweepResult, format_table2
+from harness.scenario import load_scenario
+
+
+def short(name: str, t_after: float = 1.0, **sim):
+    sc = load_scenario(name)
+    return dataclasses.replace(sc, simulation=dataclasses.replace(sc.simulation,
+                                                                  t_after=t_after, **sim))
+
+
+def ivp_deflection(run, spec: ModeSpec, t_stop: float):
+    """ε of the time-varying ODE with ω(t) = 2π f(z(t)), DOP853, rtol 1e-11.
+
+    q̈(t) is the linear interpolation of the samples (exact: constant jerk per sample) and
+    z(t) the cubic Hermite spline of (z, v_z) (exact: the Z reference is cubic per sample).
+    """
+    t = run.t
+    zs = CubicHermiteSpline(t, run.z, run.v_z)
+
+    def rhs(tt, y):
+        w = 2 * math.pi * spec.f(float(zs(tt)))
+        return [y[1], -2 * spec.zeta * w * y[1] - w * w * y[0] - np.interp(tt, t, run.a)]
+
+    kinks = t[np.flatnonzero(np.diff(run.j) != 0) + 1]
+    edges = sorted({0.0, t_stop, *[k for k in kinks.tolist() if k < t_stop]})
+    y = np.zeros(2)
+    out = {}
+    for lo, hi in zip(edges[:-1], edges[1:], strict=True):
+        sol = solve_ivp(rhs, (lo, hi), y, method="DOP853", rtol=1e-11, atol=1e-15,
+                        max_step=0.01, dense_output=True)
+        y = sol.y[:, -1]
+        sel = (t >= lo) & (t <= hi)
+        for k in np.flatnonzero(sel):
+            out[k] = sol.sol(t[k])
+    idx = np.array(sorted(out))
+    return idx, np.array([out[k] for k in idx]).T
+
+
+@pytest.mark.parametrize("name, profile", [("X", "JL"), ("X", "DJL"), ("Y", "DJL"),
+                                           ("Y", "AL")])
+def test_cosimulated_deflection_matches_solve_ivp(fmu2, name, profile):
+    """The co-simulation's scheduled plant against an independent high-accuracy solution of
+    the same time-varying ODE: residual amplitude within 1 % (in fact ~1e-5)."""
+    sc = short(name, t_after=0.3)
+    with Session(fmu2) as s:
+        tun = s.tune(sc, profile)
+        run = s.run(sc, profile, tun.T_F if tun else None)
+    spec = sc.modemap.tuned
+    idx, (eps, deps) = ivp_deflection(run, spec, run.t_end + 0.3)
+    assert np.max(np.abs(run.eps[idx] - eps)) <= 1e-4 * np.max(np.abs(eps))
+    k = int(round(run.t_end / run.step))
+    A_ref = free_amplitude(eps[k], deps[k], spec.at(run.z[k]))
+    assert run.free_amplitude == pytest.approx(A_ref, rel=1e-2)
+    assert run.free_amplitude == pytest.approx(A_ref, rel=1e-4)
+    tail = idx[idx >= k]
+    assert residual_peak(run.t, run.eps, run.t_end) == pytest.approx(
+        np.max(np.abs(eps[tail - idx[0]])), rel=1e-2)
+
+
+def test_fmi2_and_fmi3_cosimulations_agree(fmus):
+    sc = short("Y", t_after=0.5)
+    runs = {}
+    for v in (2, 3):
+        with Session(fmus[v]) as s:
+            assert s.axis.fmi_version == v
+            runs[v] = s.run(sc, "DJL", (0.095, 0.104, 0.104, 0.13))
+    np.testing.assert_array_equal(runs[2].x, runs[3].x)
+    np.testing.assert_array_equal(runs[2].z, runs[3].z)
+    np.testing.assert_allclose(runs[2].eps, runs[3].eps, atol=1e-15)
+    assert runs[3].fmi_version == 3
+
+
+def test_reference_is_the_generator_output_and_z_is_synchronised(fmu3):
+    sc = short("X", t_after=0.2)
+    T_F = (0.118, 0.12, 0.142, 0.147)
+    with Session(fmu3) as s:
+        run = s.run(sc, "DJL", T_F)
+    tr = generate(Session.move_params(sc, "DJL", T_F), fmu=fmu3, t_stop=run.t[-1])
+    np.testing.assert_array_equal(run.x, tr.x)
+    np.testing.assert_array_equal(run.a, tr.a)
+    assert run.motion_time == pytest.approx(tr.motion_time)
+    assert run.N_F == tr.N_F
+    # Z starts and ends with the excited axis (not later), at its target
+    assert run.z_synced
+    assert run.t_end - 0.02 <= run.z_t_end <= run.t_end + 1e-9
+    assert run.z[-1] == pytest.approx(sc.z.z0 + sc.z.distance, abs=1e-12)
+    assert run.z[0] == sc.z.z0
+    ztr = generate(Session.z_move_params(sc, run.z_v_max), fmu=fmu3, t_stop=run.t[-1])
+    np.testing.assert_array_equal(run.z, ztr.x)
+    # the mode frequency follows z
+    np.testing.assert_allclose(run.f[0], [sc.modemap.tuned.f(z) for z in run.z])
+
+
+def test_user_supplied_fmu_file(tmp_path, fmu2):
+    path = tmp_path / "some_generator.fmu"
+    shutil.copy(fmu2, path)
+    res = run_scenario(short("Y", t_after=0.3), fmu=path)
+    assert isinstance(res, ScenarioResult)
+    assert str(path) in res.header()
+
+
+def test_step_must_be_a_multiple_of_Te_and_coarser_steps_work(fmu2):
+    sc = short("X", t_after=0.5)
+    with Session(fmu2) as s:
+        params = Session.move_params(sc, "JL", (0.15,) * 4)
+        zp = Session.z_move_params(sc, 0.6)
+        with pytest.raises(ValueError, match="multiple"):
+            cosimulate(s.axis, s.z_axis, params, zp, sc.modemap.scheduled(), 1.0, 0.0015)
+        fine = cosimulate(s.axis, s.z_axis, params, zp, sc.modemap.scheduled(), 1.6, 0.001)
+        coarse = cosimulate(s.axis, s.z_axis, params, zp, sc.modemap.scheduled(), 1.6, 0.004)
+    assert coarse.t[1] == pytest.approx(0.004)
+    # first-order hold between communication points: close to the exact 1 ms result
+    np.testing.assert_allclose(coarse.eps, fine.eps[::4], atol=2e-3 * np.max(np.abs(fine.eps)))
+    assert coarse.free_amplitude == pytest.approx(fine.free_amplitude, rel=0.05)
+
+
+def test_two_modes_add_up(fmu2):
+    sc = short("Y", t_after=0.3)
+    mm = ModeMap((sc.modemap.modes[0], ModeSpec(ConstantLaw(30.0), 0.02, gain=0.2, name="30 Hz")))
+    sc2 = dataclasses.replace(sc, modemap=mm)
+    with Session(fmu2) as s:
+        run = s.run(sc2, "JL", (0.135,) * 4)
+    assert run.eps_modes.shape == (2, run.t.size)
+    np.testing.assert_allclose(run.eps, run.eps_modes.sum(axis=0), atol=1e-16)
+    assert run.f[1] == pytest.approx(np.full(run.t.size, 30.0))
+    assert len(run.free_amplitudes) == 2
+    assert run.modes_end[1] == Mode(30.0, 0.02, 0.2)
+
+
+def test_run_scenario_is_one_call_and_its_metrics_are_right(tmp_path, fmu2):
+    res = run_scenario(short("X", t_after=2.0), fmu=fmu2)
+    assert list(res.profiles) == ["AL", "JL", "DJL"]
+    djl = res.profiles["DJL"]
+    # the band is the largest residual of DJL (the paper's), computed here independently
+    run = djl.run
+    after = run.t >= run.t_end - 1e-12
+    assert res.band == pytest.approx(np.max(np.abs(run.eps[after])))
+    # ... so DJL is inside its own band from the end of its motion on
+    assert djl.metrics.settling_time <= run.t_end - run.t_start + 1e-9
+    for p in res.profiles.values():
+        r = p.run
+        assert p.metrics.residual == pytest.approx(np.max(np.abs(r.eps[r.t >= r.t_end - 1e-12])))
+        err = np.abs(r.x + r.eps - r.target)
+        ts = p.metrics.settling_time
+        if math.isfinite(ts) and r.t_start + ts < r.t[-1]:
+            # inside the band from then on, outside just before
+            assert np.all(err[r.t >= r.t_start + ts + 1e-9] <= res.band * (1 + 1e-12))
+            assert np.any(err[(r.t < r.t_start + ts) & (r.t > r.t_start + ts - 0.05)]
+                          > res.band * 0.999)
+        assert p.metrics.motion_time == pytest.approx(r.t_end - r.t_start)
+    # the paper's ordering on this axis: JL and DJL leave far less than AL
+    assert res.metric("JL", "residual") < 0.3 * res.metric("AL", "residual")
+    assert res.metric("DJL", "residual") < res.metric("JL", "residual")
+    text = res.table()
+    for row in ("Residual vibration [mm]", "Settling time [s]", "Motion time", "(100 %)"):
+        assert row in text
+    path = res.to_csv(tmp_path / "x.csv")
+    lines = path.read_text().splitlines()
+    assert len(lines) == 4 and lines[0].startswith("scenario,profile")
+    fig = res.plot()
+    assert len(fig.axes) >= 8
+    plt.close(fig)
+
+
+def test_undamped_mode_settles_into_its_own_band(tmp_path, fmu2):
+    """ζ = 0: the free oscillation never decays; with the band equal to DJL's residual, DJL is
+    inside from the end of its motion, and a profile leaving more never settles."""
+    sc = short("Y", t_after=0.5)
+    sc = dataclasses.replace(sc, modemap=ModeMap((ModeSpec(ConstantLaw(12.0), 0.0),)))
+    res = run_scenario(sc, fmu=fmu2)
+    djl, al = res.profiles["DJL"], res.profiles["AL"]
+    assert djl.metrics.settling_time <= djl.metrics.motion_time + 1e-9
+    assert al.metrics.residual > res.band
+    assert al.metrics.settling_time == math.inf
+
+
+def test_settling_beyond_the_record_is_extended_analytically(fmu2):
+    """A short record is continued with the free response: same settling time as a long one."""
+    long_ = run_scenario(short("X", t_after=4.0), fmu=fmu2)
+    with Session(fmu2) as s:
+        sc = short("X", t_after=0.3)
+        run = s.run(sc, "AL")
+    m_short = profile_metrics(run, long_.band)
+    m_long = long_.profiles["AL"].metrics
+    assert run.t[-1] < m_long.settling_time  # the short record ends before AL settles
+    assert m_short.settling_time == pytest.approx(m_long.settling_time, abs=1.5e-3)
+    # and directly on the long record
+    r = long_.profiles["AL"].run
+    assert settling_time(r.t, r.error, long_.band, r.t_start) == pytest.approx(
+        m_long.settling_time, abs=1e-9)
+
+
+def test_small_sweep_and_table2(fmu2, tmp_path):
+    sc = short("sweep-Y", t_after=1.0)
+    sc = dataclasses.replace(sc, sweep=dataclasses.replace(sc.sweep, distance=(0.3,),
+                                                           z_distance=(0.2, 0.45), v_max=(2.0,)))
+    res = run_scenario(sc, fmu=fmu2)
+    assert isinstance(res, SweepResult) and len(res.cases) == 2
+    r, s = res.changes()
+    for c, rr in zip(res.cases, r, strict=True):
+        jl, djl = c.metric("JL", "residual"), c.metric("DJL", "residual")
+        assert rr == pytest.approx(100 * (djl - jl) / jl)
+    st = res.stats()
+    assert st["residual"].mean == pytest.approx(np.mean(r))
+    assert st["settling"].std == pytest.approx(np.std(s, ddof=1))
+    assert "Mean value" in format_table2([res])
+    assert len(res.to_csv(tmp_path / "sw.csv").read_text().splitlines()) == 1 + 2 * 3
+    plt.close(res.plot())
