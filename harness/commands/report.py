@@ -1,0 +1,103 @@
+"""``djl-fmu report``: verify the papers' filtering claims, write an HTML report."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+
+def _claim_list(text: str) -> list[int]:
+    try:
+        out = sorted({int(x) for x in text.replace(" ", "").split(",") if x})
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"--claims takes claim numbers separated by commas, e.g. 1,3 (got {text!r})"
+        ) from None
+    if not out:
+        raise argparse.ArgumentTypeError("--claims: no claim number given")
+    return out
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``report`` command."""
+    from ..claims import CATALOGUE
+
+    available = ", ".join(f"{n} ({title})" for n, (_m, title) in sorted(CATALOGUE.items()))
+    p = sub.add_parser(
+        "report",
+        help="verify the papers' filtering claims (Bode, impulse, residual vibration) and "
+             "write one HTML report",
+        description=(
+            "Run every claim check of Bearee & Olabi 2013 and Bearee 2014 against the product "
+            "(the generator FMU run through fmpy, the harness's flexible-axis mode, "
+            "python-control filters) and write one self-contained HTML file: per claim the "
+            "paper's statement with its equation / figure number, the figures, the computed "
+            "numbers with their tolerances, and PASSED / FAILED. Claims available: "
+            f"{available}. Takes a few seconds (the FMU is built on first use)."),
+        epilog=(
+            "Each check is either a 'product' check (the FMU / harness against the theory it "
+            "implements) or a 'paper' check (a quantitative statement of a paper as written). "
+            "Exit status: 0 when every product check passes (paper statements that fail are "
+            "reported as findings), 1 when a product check fails or a claim cannot be "
+            "computed, also when a paper statement fails with --strict; 2 on bad arguments."),
+    )
+    p.add_argument("-o", "--output", type=Path, default=Path("report.html"), metavar="HTML",
+                   help="the HTML file to write (default: ./report.html)")
+    p.add_argument("--fast", action="store_true",
+                   help="small grids, as in the test suite (default: full grids)")
+    p.add_argument("--claims", type=_claim_list, default=None, metavar="N[,N...]",
+                   help="only these claims, e.g. --claims 1,3 (default: all)")
+    p.add_argument("--fmi-version", type=int, choices=(2, 3), default=2,
+                   help="FMU built from this package's sources and verified (default: 2)")
+    p.add_argument("--fmu", type=Path, default=None, metavar="PATH",
+                   help="verify this generator FMU file instead (same variables)")
+    p.add_argument("--figures-beside", action="store_true",
+                   help="write the figures as PNG files in <HTML stem>_files/ instead of "
+                        "embedding them")
+    p.add_argument("--strict", action="store_true",
+                   help="exit 1 if any check fails, paper statements included")
+    p.add_argument("--no-peers", action="store_true",
+                   help="leave out the section comparing AL/JL/DJL with the peer methods "
+                        "(time-optimal JL, Sato, input shapers, damped jerk; needs ruckig)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the claims, write the report, print one line per claim."""
+    from ..claims import CATALOGUE
+    from ..report import print_failures, write_report
+
+    numbers = set(CATALOGUE)
+    if args.claims is not None:
+        unknown = sorted(set(args.claims) - numbers)
+        if unknown:
+            print(f"djl-fmu report: no claim {unknown}; available: {sorted(numbers)}",
+                  file=sys.stderr)
+            return 2
+    if args.fmu is not None and not args.fmu.is_file():
+        print(f"djl-fmu report: --fmu {args.fmu}: no such file", file=sys.stderr)
+        return 2
+    command = " ".join(
+        ["djl-fmu report", "-o", str(args.output)]
+        + (["--fast"] if args.fast else [])
+        + (["--claims", ",".join(map(str, args.claims))] if args.claims else [])
+        + (["--no-peers"] if args.no_peers else [])
+        + (["--fmu", str(args.fmu)] if args.fmu else ["--fmi-version", str(args.fmi_version)]))
+    summary = write_report(args.output, fast=args.fast, fmi_version=args.fmi_version,
+                           fmu=args.fmu, only=args.claims, embed=not args.figures_beside,
+                           progress=True, command=command,
+                           on_result=lambda r: print(r.summary(), flush=True),
+                           peers=False if args.no_peers else None)
+    print()
+    print_failures(summary)
+    n_ok = sum(r.passed for r in summary.results)
+    print(f"\n{n_ok}/{len(summary.results)} claims passed; report: {summary.path} "
+          f"({summary.elapsed:.1f} s)")
+    if not summary.product_ok:
+        print("djl-fmu report: a product check failed or a claim could not be computed",
+              file=sys.stderr)
+        return 1
+    if args.strict and not summary.all_passed:
+        return 1
+    return 0

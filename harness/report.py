@@ -1,0 +1,359 @@
+"""The claims report: one self-contained HTML file.
+
+:func:`write_report` runs the registered claims (:mod:`harness.claims`) and
+writes, per claim, the paper's statement with its equation / figure numbers,
+how both sides were computed, the figures (PNG embedded as base64, or written
+beside the HTML), the computed numbers with their tolerances, and PASSED /
+FAILED.  Failures are never hidden: a check that fails is shown with its
+numbers, a claim whose computation raised is shown with its traceback.
+
+Examples
+--------
+>>> from harness.report import write_report
+>>> summary = write_report("report.html", fast=True)   # doctest: +SKIP
+>>> summary.product_ok                                  # doctest: +SKIP
+True
+"""
+
+from __future__ import annotations
+
+import base64
+import datetime as _dt
+import html
+import io
+import os
+import platform
+import sys
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from .claims import ClaimResult, Settings, run_claims
+from .claims.formulas import DERIVATIONS
+
+_CSS = """
+body { font-family: -apple-system, "Segoe UI", Helvetica, Arial, sans-serif; margin: 2em auto;
+       max-width: 1150px; color: #222; line-height: 1.45; }
+h1 { font-size: 1.6em; } h2 { margin-top: 2.2em; border-bottom: 1px solid #ccc; }
+table { border-collapse: collapse; margin: 0.8em 0; font-size: 0.86em; }
+th, td { border: 1px solid #ccc; padding: 3px 7px; text-align: left; vertical-align: top; }
+th { background: #f3f3f3; }
+td.num { text-align: right; font-family: monospace; white-space: nowrap; }
+.PASSED { color: #0a7d28; font-weight: bold; } .FAILED { color: #c0161b; font-weight: bold; }
+.ERROR { color: #fff; background: #c0161b; font-weight: bold; padding: 0 4px; }
+.badge { font-size: 0.75em; padding: 2px 8px; border-radius: 4px; margin-left: 0.6em;
+         vertical-align: middle; }
+.badge.PASSED { background: #d9f2df; } .badge.FAILED { background: #fbdcdc; }
+blockquote { margin: 0.6em 0; padding: 0.4em 1em; background: #f7f7f4;
+             border-left: 4px solid #bbb; }
+.meta { color: #555; font-size: 0.9em; } .kind { color: #555; font-size: 0.85em; }
+img { max-width: 100%; border: 1px solid #eee; margin: 0.5em 0; }
+pre { background: #f6f6f6; padding: 0.6em; overflow-x: auto; font-size: 0.85em; }
+.note { color: #555; font-size: 0.85em; }
+"""
+
+
+@dataclass
+class ReportSummary:
+    """What :func:`write_report` did.
+
+    Attributes
+    ----------
+    path : Path
+        The HTML file written.
+    results : list of ClaimResult
+    elapsed : float
+        Wall time (s), FMU build included.
+    """
+
+    path: Path
+    results: list[ClaimResult]
+    elapsed: float
+
+    @property
+    def all_passed(self) -> bool:
+        """Every check of every claim passed."""
+        return all(r.passed for r in self.results)
+
+    @property
+    def product_ok(self) -> bool:
+        """Every *product* check passed and no claim raised."""
+        return all(r.product_passed for r in self.results)
+
+    def lines(self) -> list[str]:
+        """One summary line per claim."""
+        return [r.summary() for r in self.results]
+
+
+def _e(text: object) -> str:
+    return html.escape(str(text))
+
+
+def _figure_png(fig) -> bytes:
+    import matplotlib.pyplot as plt
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100)
+    plt.close(fig)
+    return buf.getvalue()
+
+
+def _versions() -> str:
+    parts = [f"Python {platform.python_version()}"]
+    for mod in ("numpy", "scipy", "control", "fmpy", "matplotlib"):
+        try:
+            m = __import__(mod)
+            parts.append(f"{mod} {getattr(m, '__version__', '?')}")
+        except ImportError:  # pragma: no cover
+            parts.append(f"{mod} missing")
+    from . import __version__
+
+    return f"djl-fmu {__version__}; " + ", ".join(parts)
+
+
+def _claim_section(r: ClaimResult, img_src: Callable[[int, int, bytes], str]) -> str:
+    out = [f'<h2 id="claim{r.number}">Claim {r.number}: {_e(r.title)}'
+           f'<span class="badge {r.verdict if r.verdict != "ERROR" else "FAILED"}">'
+           f'{r.verdict}</span></h2>']
+    n_prod = [c for c in r.checks if c.kind == "product"]
+    n_paper = [c for c in r.checks if c.kind == "paper"]
+    out.append(f'<p class="meta">Source: {_e(r.source)} &middot; '
+               f'product checks {sum(c.passed for c in n_prod)}/{len(n_prod)} passed &middot; '
+               f'paper statements {sum(c.passed for c in n_paper)}/{len(n_paper)} confirmed '
+               f'&middot; {r.elapsed:.1f} s</p>')
+    if r.statement:
+        out.append(f"<h3>The paper says</h3><blockquote>{_e(r.statement)}</blockquote>")
+    if r.method:
+        out.append(f"<h3>How both sides are computed</h3><p>{_e(r.method)}</p>")
+    if r.error:
+        out.append('<h3 class="FAILED">The computation raised: claim FAILED</h3>'
+                   f"<pre>{_e(r.error)}</pre>")
+    for i, fig in enumerate(r.figures):
+        src = img_src(r.number, i, _figure_png(fig))
+        out.append(f'<img src="{src}" alt="claim {r.number}, figure {i + 1}">')
+    r.figures.clear()
+    if r.checks:
+        out.append("<h3>Checks</h3><table><tr><th>check</th><th>kind</th><th>paper side</th>"
+                   "<th>product / simulation</th><th>rule</th><th>unit</th><th>verdict</th>"
+                   "</tr>")
+        for c in r.checks:
+            name, kind, exp, meas, rule, unit, verdict = c.row()
+            note = f'<div class="note">{_e(c.note)}</div>' if c.note else ""
+            out.append(f"<tr><td>{_e(name)}{note}</td><td class='kind'>{_e(kind)}</td>"
+                       f"<td class='num'>{_e(exp)}</td><td class='num'>{_e(meas)}</td>"
+                       f"<td>{_e(rule)}</td><td>{_e(unit)}</td>"
+                       f"<td class='{verdict}'>{verdict}</td></tr>")
+        out.append("</table>")
+    for t in r.tables:
+        out.append(f"<h3>{_e(t.caption)}</h3><table><tr>"
+                   + "".join(f"<th>{_e(h)}</th>" for h in t.header) + "</tr>")
+        for row in t.formatted():
+            out.append("<tr>" + "".join(f"<td class='num'>{_e(c)}</td>" for c in row) + "</tr>")
+        out.append("</table>")
+    if r.derivations:
+        out.append("<h3>Equations re-derived for this claim</h3><ul>"
+                   + "".join(f"<li>{_e(d)}</li>" for d in r.derivations) + "</ul>")
+    return "\n".join(out)
+
+
+def peers_section(settings: Settings,
+                  img_src: Callable[[int, int, bytes], str] | None = None) -> str:
+    """HTML section comparing AL / JL / DJL with the peers (issue 5) on scenarios X and Y.
+
+    Every method goes through the same co-simulation (generator FMU or the peer's exact
+    motion, Z axis, plant) and the same metrics as ``djl-fmu compare``; fast settings
+    use fewer points on the robustness curves.
+    """
+    import numpy as np
+
+    from .peers.compare import compare_scenario
+    from .scenario import load_scenario
+
+    errors = np.linspace(-0.4, 0.4, 9 if settings.fast else 41)
+    parts = [
+        "<h2 id='peers'>Peers side by side: which law ends the motion soonest within the "
+        "tolerance?</h2>",
+        "<p>AL, JL and DJL from the FMU against the methods users would otherwise pick: "
+        "time-optimal jerk-limited (Park et al. 2017, cross-checked with ruckig), Sato &amp; "
+        "Shirase 2021's designed jerk times (Condition III), the ZV, ZVD, MZV and EI input "
+        "shapers convolved with the AL profile and the damped-jerk law (Béarée 2014 §4.2), "
+        "all tuned to the mode at the end of the motion, on the harness's default scenarios. "
+        "Motion time is also given relative to the time-optimal JL with the same limits; "
+        "residual in % of AL; settling into the paper's band (the largest residual of DJL). "
+        "The figures show the residual against an error on the mode frequency (stationary "
+        "mode). Same as <code>djl-fmu compare</code>; details in docs/peers.md.</p>",
+    ]
+    if img_src is None:
+        def img_src(_n: int, _i: int, png: bytes) -> str:
+            return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
+
+    import matplotlib.pyplot as plt
+
+    for i, name in enumerate(("X", "Y")):
+        sc = load_scenario(name).with_fmu(
+            None if settings.fmu is None else Path(settings.fmu), settings.fmi_version)
+        try:
+            cmp = compare_scenario(sc, errors=errors)
+            fig = cmp.plot()
+            png = _figure_png(fig)
+            plt.close(fig)
+            parts.append(f"<h3>Scenario {_e(name)}</h3>\n<pre>{_e(cmp.table())}</pre>\n"
+                         f"<img alt='robustness, scenario {_e(name)}' "
+                         f"src='{img_src(0, i, png)}'>")
+        except Exception as exc:  # noqa: BLE001 - shown in the report, never hidden
+            parts.append(f"<p class='FAILED'>Comparison on scenario {_e(name)} raised: "
+                         f"{_e(repr(exc))}</p>")
+    return "\n".join(parts)
+
+
+def render_html(results: Sequence[ClaimResult], *, settings: Settings, elapsed: float,
+                command: str | None = None,
+                img_src: Callable[[int, int, bytes], str] | None = None,
+                extra_sections: Sequence[str] = ()) -> str:
+    """Render the report as an HTML string (closes the results' figures).
+
+    ``extra_sections`` are HTML fragments appended after the claims (the peer
+    comparison of issue 5).
+    """
+    if img_src is None:
+        def img_src(_n: int, _i: int, png: bytes) -> str:
+            return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
+
+    fmu = (f"user FMU {settings.fmu}" if settings.fmu else
+           f"FMU built from this package's sources (FMI {settings.fmi_version}.0)")
+    n_ok = sum(r.passed for r in results)
+    rows = []
+    for r in results:
+        prod = [c for c in r.checks if c.kind == "product"]
+        pap = [c for c in r.checks if c.kind == "paper"]
+        rows.append(
+            f"<tr><td><a href='#claim{r.number}'>{r.number}</a></td><td>{_e(r.title)}</td>"
+            f"<td>{_e(r.source)}</td><td class='num'>{sum(c.passed for c in prod)}/{len(prod)}"
+            f"</td><td class='num'>{sum(c.passed for c in pap)}/{len(pap)}</td>"
+            f"<td class='{r.verdict}'>{r.verdict}</td><td class='num'>{r.elapsed:.1f} s</td>"
+            "</tr>")
+    failed = [(r, c) for r in results for c in r.checks if not c.passed]
+    failed_html = "".join(f"<li>claim {r.number} ({_e(c.kind)}): {_e(c.describe())}</li>"
+                          for r, c in failed)
+    errors = "".join(f"<li>claim {r.number}: the computation raised (see its section)</li>"
+                     for r in results if r.error)
+    body = [
+        "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
+        "<title>djl-fmu: verification of the papers' filtering claims</title>",
+        f"<style>{_CSS}</style></head><body>",
+        "<h1>Bode and impulse analyses verifying the papers' filtering claims</h1>",
+        "<p>Each claim of Béarée &amp; Olabi 2013 (<i>Dissociated jerk-limited trajectory "
+        "applied to time-varying vibration reduction</i>, RCIM 29(2)) and Béarée 2014 "
+        "(<i>État de l'art de la compensation de vibration par la génération de "
+        "trajectoire</i>, Assises MUGV) is computed twice: the paper's side (closed forms, "
+        "re-derived where the text is garbled) and the product's side (the generator FMU run "
+        "through fmpy, the harness's plant, python-control), and compared with the stated "
+        "tolerance. <b>product</b> checks test the FMU and the harness against the theory "
+        "they implement; <b>paper</b> checks test a quantitative statement of a paper as "
+        "written: when one fails, the finding is about the paper and the numbers say by "
+        "how much.</p>",
+        f"<p class='meta'>Generated {_dt.datetime.now().isoformat(timespec='seconds')} in "
+        f"{elapsed:.1f} s &middot; {_e(fmu)} &middot; "
+        f"{'fast settings' if settings.fast else 'full settings'} &middot; "
+        f"{_e(_versions())}"
+        + (f" &middot; command: <code>{_e(command)}</code>" if command else "") + "</p>",
+        f"<h2>Summary: {n_ok}/{len(results)} claims passed</h2>",
+        "<table><tr><th>claim</th><th>title</th><th>source</th><th>product checks</th>"
+        "<th>paper statements</th><th>verdict</th><th>time</th></tr>",
+        *rows, "</table>",
+    ]
+    if failed or errors:
+        body.append("<h3>What failed</h3><ul>" + errors + failed_html + "</ul>")
+    body.append("<h3>Equations of the papers re-derived (garbled or wrong in the text)</h3><ul>"
+                + "".join(f"<li><b>{_e(k)}</b>: {_e(v)}</li>" for k, v in DERIVATIONS.items())
+                + "</ul>")
+    if extra_sections:
+        body.append("<p>Also in this report: <a href='#peers'>peers side by side</a>.</p>")
+    for r in results:
+        body.append(_claim_section(r, img_src))
+    body.extend(extra_sections)
+    body.append("</body></html>")
+    return "\n".join(body)
+
+
+def write_report(path: str | os.PathLike = "report.html", *, fast: bool = False,
+                 fmi_version: int = 2, fmu: str | os.PathLike | None = None,
+                 only: Sequence[int] | None = None, embed: bool = True,
+                 progress: bool = False, command: str | None = None,
+                 on_result: Callable[[ClaimResult], None] | None = None,
+                 peers: bool | None = None) -> ReportSummary:
+    """Run the claims and write the HTML report.
+
+    Parameters
+    ----------
+    path : path-like
+        HTML file to write (parent folders are created; written atomically).
+    fast : bool
+        Small grids (as in the test suite).
+    fmi_version : {2, 3}
+        Which FMU to build and verify when ``fmu`` is not given.
+    fmu : path-like, optional
+        A generator FMU file to verify instead.
+    only : sequence of int, optional
+        Claim numbers to run (all by default).
+    embed : bool
+        Embed the figures as base64 PNG (one self-contained file); otherwise
+        write them to ``<stem>_files/`` beside the HTML.
+    progress : bool
+        tqdm progress bars in the longer sweeps (only on a TTY).
+    command : str, optional
+        Command line shown in the report.
+    on_result : callable, optional
+        Called with each claim's result as it completes.
+    peers : bool, optional
+        Append the comparison with the peer methods (issue 5; needs ``ruckig``);
+        by default when every claim is run.
+
+    Returns
+    -------
+    ReportSummary
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    t0 = time.perf_counter()
+    path = Path(path)
+    settings = Settings(fast=fast, fmi_version=fmi_version, fmu=fmu, progress=progress)
+    results = run_claims(settings, only=only, on_result=on_result)
+    img_src = None
+    files_dir = path.with_name(path.stem + "_files")
+    if not embed:
+        files_dir.mkdir(parents=True, exist_ok=True)
+
+        def img_src(n: int, i: int, png: bytes) -> str:
+            name = f"claim{n}_{i + 1}.png" if n else f"peers_{i + 1}.png"
+            (files_dir / name).write_bytes(png)
+            return f"{files_dir.name}/{name}"
+
+    if peers is None:
+        peers = only is None
+    extra = [peers_section(settings, img_src)] if peers else []
+    elapsed = time.perf_counter() - t0
+
+    text = render_html(results, settings=settings, elapsed=elapsed, command=command,
+                       img_src=img_src, extra_sections=extra)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + f".tmp{os.getpid()}")
+    try:
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    return ReportSummary(path, results, time.perf_counter() - t0)
+
+
+def print_failures(summary: ReportSummary, stream=None) -> None:
+    """Print every failed check and every claim that raised (to ``stream``, default stdout)."""
+    stream = sys.stdout if stream is None else stream
+    for r in summary.results:
+        for c in r.failed_checks():
+            print(f"  claim {r.number} [{c.kind}] {c.describe()}", file=stream)
+        if r.error:
+            print(f"  claim {r.number}: the computation raised:\n{r.error}", file=stream)
