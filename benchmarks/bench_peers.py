@@ -1,0 +1,217 @@
+"""Benchmark: the generator FMU against ruckig, and the co-simulation with either reference.
+
+Prints, in one run on this machine (medians of --repeats runs):
+
+1. samples per second of the reference, produced one sample at a time from Python:
+   the FMU (C) through fmpy (``doStep(h = Te)`` + ``getReal`` of x, v, a, j) and
+   ruckig's ``Trajectory.at_time`` -- and, for scale, the C core computing every
+   sample in a C loop (benchmarks/c/bench_stream.c, when gcc is available);
+2. planning time per move: the FMU re-planned (``fmi2Reset``, parameters,
+   initialisation, read ``motion_time``) against ``Ruckig.calculate``, and Park et
+   al.'s closed forms in Python;
+3. the co-simulation real-time factor (simulated / wall time) of a 10 s run at 1 ms
+   of scenario X: the generator FMU as the excited axis (harness.cosim), and a
+   precomputed time-optimal reference from ruckig (harness.peers.compare).
+
+The ratios FMU / ruckig are printed beside the numbers.
+
+    python benchmarks/bench_peers.py [--repeats 7]
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import statistics
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from harness.cosim import Session
+from harness.fmu.build import default_fmu
+from harness.fmu.runner import GeneratorFMU
+from harness.peers.compare import cosimulate_reference
+from harness.peers.park import park_profile
+from harness.peers.ruckig_ref import planner, time_optimal
+from harness.planner import AxisFMU
+from harness.scenario import load_scenario
+
+TE = 1e-3
+MOVE = {"distance": 0.4, "v_max": 0.5, "a_max": 4.0, "d_max": 4.0}
+T_F = 0.152  # JL of scenario X
+J_MAX = MOVE["a_max"] / T_F
+
+
+def fmu_per_sample(n: int, repeats: int) -> float:
+    """Median seconds per sample: doStep(h = Te) + getReal(x, v, a, j) through fmpy."""
+    params = dict(MOVE, profile=2, T_F1=T_F, Te=TE)
+    with GeneratorFMU(default_fmu(2), params=params) as g:
+        g.initialize()
+        vrs = g.vr(["x", "v", "a", "j"])
+        state = g.get_state()
+        out = []
+        for _ in range(repeats):
+            g.set_state(state, 0.0)
+            step, get = g.fmu.doStep, g.get_reals
+            t = 0.0
+            t0 = time.perf_counter()
+            for _ in range(n):
+                step(currentCommunicationPoint=t, communicationStepSize=TE)
+                get(vrs)
+                t += TE
+            out.append((time.perf_counter() - t0) / n)
+        g.free_state(state)
+    return statistics.median(out)
+
+
+def ruckig_per_sample(n: int, repeats: int) -> float:
+    """Median seconds per ``at_time`` call (position, velocity, acceleration)."""
+    r = time_optimal(MOVE["distance"], MOVE["v_max"], MOVE["a_max"], J_MAX)
+    at = r.trajectory.at_time
+    ts = (np.arange(n) * (r.duration / n)).tolist()
+    out = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for t in ts:
+            at(t)
+        out.append((time.perf_counter() - t0) / n)
+    return statistics.median(out)
+
+
+def c_core_rate(repeats: int) -> tuple[float, float] | None:
+    """Samples/s of the C core computing every sample, and its planning time per JL move (s).
+
+    None without gcc.
+    """
+    from harness._resources import fmu_src_dir
+    from harness.fmu.build import CFLAGS
+
+    src = Path(__file__).parent / "c" / "bench_stream.c"
+    if not src.is_file():
+        return None
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            exe = Path(tmp) / "bench_stream"
+            flags = [f for f in CFLAGS if f not in ("-fPIC", "-fvisibility=hidden")]
+            subprocess.run(["gcc", *flags, f"-I{fmu_src_dir()}", str(src),
+                            str(fmu_src_dir() / "djl_core.c"), "-o", str(exe), "-lm"],
+                           check=True, capture_output=True)
+            out = subprocess.run([str(exe), repr(0.01), repr(1e-4), repr(1000.0), str(repeats)],
+                                 capture_output=True, text=True, check=True).stdout
+            plan = subprocess.run([str(exe), "plan", "2", repr(MOVE["distance"]), "20000"],
+                                  capture_output=True, text=True, check=True).stdout
+    except (OSError, subprocess.CalledProcessError):
+        return None
+    rows = [line.split() for line in out.splitlines()]
+    return int(rows[0][0]) / statistics.median(float(r[1]) for r in rows), float(plan)
+
+
+def fmu_plan(n: int, repeats: int) -> float:
+    """Median seconds per re-plan of one FMU instance (distances vary)."""
+    rng = np.random.default_rng(0)
+    d = rng.uniform(0.05, 1.0, n).tolist()
+    out = []
+    with AxisFMU(default_fmu(2)) as ax:
+        base = dict(MOVE, profile=2, T_F1=T_F, Te=TE)
+        ax.plan(base)
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            for di in d:
+                base["distance"] = di
+                ax.plan(base)
+            out.append((time.perf_counter() - t0) / n)
+    return statistics.median(out)
+
+
+def ruckig_plan(n: int, repeats: int) -> float:
+    """Median seconds per ``Ruckig.calculate`` (objects reused, distances vary)."""
+    otg, inp, traj = planner(MOVE["v_max"], MOVE["a_max"], J_MAX)
+    rng = np.random.default_rng(0)
+    d = rng.uniform(0.05, 1.0, n).tolist()
+    out = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for di in d:
+            inp.target_position = [di]
+            otg.calculate(inp, traj)
+        out.append((time.perf_counter() - t0) / n)
+    return statistics.median(out)
+
+
+def park_plan(n: int, repeats: int) -> float:
+    """Median seconds per closed-form plan (Python)."""
+    rng = np.random.default_rng(0)
+    d = rng.uniform(0.05, 1.0, n).tolist()
+    out = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for di in d:
+            park_profile(di, MOVE["v_max"], MOVE["a_max"], J_MAX)
+        out.append((time.perf_counter() - t0) / n)
+    return statistics.median(out)
+
+
+def cosim_rtf(repeats: int, t_stop: float = 10.0) -> tuple[float, float]:
+    """Real-time factors of 10 s of scenario X: FMU reference, and ruckig's reference."""
+    sc = load_scenario("X")
+    ref = time_optimal(MOVE["distance"], MOVE["v_max"], MOVE["a_max"], J_MAX).motion()
+    fmu_w, ref_w = [], []
+    with Session() as s:
+        s.run(sc, "JL", (T_F,) * 4, t_stop=t_stop)  # warm-up
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            s.run(sc, "JL", (T_F,) * 4, t_stop=t_stop)
+            fmu_w.append(time.perf_counter() - t0)
+            t0 = time.perf_counter()
+            cosimulate_reference(sc, s, ref, "time-optimal JL", t_stop=t_stop)
+            ref_w.append(time.perf_counter() - t0)
+    return t_stop / statistics.median(fmu_w), t_stop / statistics.median(ref_w)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--repeats", type=int, default=7)
+    args = ap.parse_args()
+    r = args.repeats
+    print(f"{platform.processor() or platform.machine()}, Python {platform.python_version()}; "
+          f"move {MOVE['distance']} m, v_max {MOVE['v_max']} m/s, a_max {MOVE['a_max']} m/s2, "
+          f"j_max {J_MAX:.3g} m/s3 (T_F = {T_F * 1e3:g} ms), Te = {TE * 1e3:g} ms; "
+          f"medians of {r} runs\n")
+
+    fs = fmu_per_sample(20000, r)
+    rs = ruckig_per_sample(20000, r)
+    cc = c_core_rate(r)
+    print(f"{'':44s}{'FMU (C)':>14s}{'ruckig':>14s}{'FMU/ruckig':>12s}")
+    print(f"{'samples/s, one at a time from Python':44s}{1 / fs:14.3e}{1 / rs:14.3e}"
+          f"{rs / fs:12.2f}")
+    print(f"{'  (us per sample)':44s}{fs * 1e6:14.2f}{rs * 1e6:14.2f}")
+    if cc is not None:
+        print(f"{'samples/s, C core, every sample in C':44s}{cc[0]:14.3e}{'-':>14s}")
+
+    fp = fmu_plan(2000, r)
+    rp = ruckig_plan(20000, r)
+    pp = park_plan(20000, r)
+    print(f"{'planning time per move, from Python [us]':44s}{fp * 1e6:14.2f}{rp * 1e6:14.2f}"
+          f"{fp / rp:12.1f}")
+    if cc is not None:
+        print(f"{'planning time per move, C core alone [us]':44s}{cc[1] * 1e6:14.2f}"
+              f"{rp * 1e6:14.2f}{cc[1] / rp:12.1f}")
+        print("  (from Python the FMU pays fmpy's calls: reset, one setter per parameter, "
+              "initialisation)")
+    print(f"  (Park et al.'s closed forms in Python: {pp * 1e6:.2f} us per move)")
+
+    rtf_fmu, rtf_ref = cosim_rtf(max(3, r // 2))
+    print(f"{'co-simulation real-time factor, 10 s of X':44s}{rtf_fmu:14.1f}{rtf_ref:14.1f}"
+          f"{rtf_fmu / rtf_ref:12.2f}")
+    print("\nFMU: the generator FMU through fmpy (a few us per call); ruckig: the Python "
+          "binding.\nThe co-simulation steps the Z-axis FMU and the plant in both columns; the "
+          "'ruckig'\ncolumn feeds the plant a precomputed time-optimal reference instead of "
+          "stepping the\nexcited axis' FMU.")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

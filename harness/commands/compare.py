@@ -1,0 +1,212 @@
+"""``djl-fmu compare``: AL / JL / DJL against the methods a user would otherwise pick."""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+from pathlib import Path
+
+DESCRIPTION = """\
+Answer "which law ends the motion soonest with the vibration inside my
+tolerance?" on the harness's scenarios: the generator's AL, JL and DJL
+profiles and their peers go through the same co-simulation (the Z axis FMU and
+the flexible axis whose mode follows Z) and the same metrics.
+
+Peers, each tuned to the mode at the end of the motion (its frequency at the
+final Z position and its damping):
+  time-optimal JL   ruckig under v_max, a_max and the JL's jerk a_max/T_F(JL)
+                    (Park et al. 2017); the motion-time ratios refer to it
+  Sato III          Sato & Shirase 2021, Condition III, T_SUM = the JL's motion
+                    time (longer if v_max or a_max demand it), T1 from eq. 28
+  AL*ZV, AL*ZVD, AL*MZV, AL*EI
+                    the FMU's AL profile convolved with an input shaper
+  damped jerk       the AL profile filtered by the damped-jerk filter
+                    (Bearee 2014, 4.2)
+
+Per scenario: motion time and its ratio to the time-optimal JL, residual
+vibration (peak |deflection| after the reference ends) and % of AL, settling
+time into the band of the scenario (default: the largest residual of DJL), and
+the residual against the mode-frequency error on a stationary mode (robustness).
+Each scenario also runs as a stationary variant (Z still at its final
+position), unless --no-stationary.  With --timeopt N (default 30), random moves
+measure how much slower than time-optimal the FIR-built JL and DJL are (per
+case of Park et al.).
+
+SCENARIO is a TOML file (format: docs/harness.md) or an embedded single-move
+scenario; default: X and Y.  Sweeps are not accepted.
+
+Outputs, in --out (default ./djl-fmu-out/compare), written once every run has
+succeeded:
+  <name>.csv              one row per method
+  <name>-robustness.csv   residual against the frequency error, per method
+  <name>-robustness.png   the same, plotted
+  <name>-runs.png         acceleration and deflection of every method
+  timeopt.csv             the random moves (with --timeopt)
+  summary.txt             the tables printed on screen
+Needs the optional dependency ruckig (pip install 'djl-fmu[compare]').
+"""
+
+EPILOG = """\
+examples:
+  djl-fmu compare                       X and Y, each also with a stationary mode
+  djl-fmu compare Y --no-stationary     scenario Y only
+  djl-fmu compare my_axis.toml --peers AL*ZVD,damped jerk --timeopt 0
+
+Exit status: 0 on success, 2 for a bad scenario or option (nothing run, nothing
+written), 1 if a run fails.
+"""
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``compare`` command."""
+    p = sub.add_parser(
+        "compare",
+        help="compare AL/JL/DJL with time-optimal JL, Sato's designed jerk times, input "
+             "shapers and the damped-jerk law on the same plant (default: scenarios X, Y)",
+        description=DESCRIPTION,
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("scenarios", nargs="*", metavar="SCENARIO",
+                   help="TOML scenario file or embedded scenario name (default: X Y)")
+    p.add_argument("-o", "--out", type=Path, default=Path("djl-fmu-out") / "compare",
+                   metavar="DIR", help="output folder (default: ./djl-fmu-out/compare)")
+    p.add_argument("--no-stationary", action="store_true",
+                   help="do not add the stationary-mode variant of each scenario")
+    p.add_argument("--peers", default=None, metavar="LIST",
+                   help="comma-separated subset of the peers (default: all: time-optimal JL, "
+                        "Sato III, AL*ZV, AL*ZVD, AL*MZV, AL*EI, damped jerk)")
+    p.add_argument("--timeopt", type=int, default=30, metavar="N",
+                   help="random moves per case for the FIR-JL/DJL vs time-optimal "
+                        "measurement (default 30; 0 to skip)")
+    p.add_argument("--fmi-version", type=int, choices=(2, 3), default=None,
+                   help="use the package's FMI 2.0 or 3.0 FMU (default: the scenario's)")
+    p.add_argument("--fmu", type=Path, default=None, metavar="PATH",
+                   help="a generator FMU file with the same variables (overrides the "
+                        "scenario's)")
+    p.add_argument("--no-plot", action="store_true", help="do not write the PNG figures")
+    p.add_argument("-q", "--quiet", action="store_true", help="do not print the tables")
+    p.set_defaults(func=run)
+
+
+def _safe(name: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_") or "scenario"
+
+
+def run(args: argparse.Namespace) -> int:
+    """Check the inputs, run every comparison, then write the outputs; return the exit status."""
+    from ..peers.compare import PEERS, stationary_variant
+    from ..peers.ruckig_ref import ruckig_available
+    from ..scenario import ScenarioError, load_scenario
+
+    prog = "djl-fmu compare"
+    # 1. check everything first
+    if not ruckig_available():
+        print(f"{prog}: needs the 'ruckig' package for the time-optimal reference: "
+              "pip install 'djl-fmu[compare]'", file=sys.stderr)
+        return 2
+    peers = PEERS
+    if args.peers:
+        peers = tuple(x.strip() for x in args.peers.split(",") if x.strip())
+        bad = [x for x in peers if x not in PEERS]
+        if bad or not peers:
+            print(f"{prog}: unknown peer(s) {bad}; choose from: {', '.join(PEERS)}",
+                  file=sys.stderr)
+            return 2
+    if args.timeopt < 0:
+        print(f"{prog}: --timeopt must be >= 0", file=sys.stderr)
+        return 2
+    names = args.scenarios or ["X", "Y"]
+    try:
+        scenarios = [load_scenario(n) for n in names]
+        if args.fmu is not None or args.fmi_version is not None:
+            scenarios = [s.with_fmu(args.fmu, args.fmi_version) for s in scenarios]
+    except ScenarioError as e:
+        print(f"{prog}: {e}", file=sys.stderr)
+        return 2
+    sweeps = [s.name for s in scenarios if s.is_sweep]
+    if sweeps:
+        print(f"{prog}: {', '.join(sweeps)}: sweeps are not compared (give single-move "
+              "scenarios such as X or Y)", file=sys.stderr)
+        return 2
+    if not args.no_stationary:
+        scenarios = [v for s in scenarios for v in
+                     ((s, stationary_variant(s)) if s.z.moves else (s,))]
+    stems = [_safe(s.name) for s in scenarios]
+    if len(set(stems)) != len(stems):
+        print(f"{prog}: two scenarios have the same name: "
+              + ", ".join(s.name for s in scenarios), file=sys.stderr)
+        return 2
+    if args.out.exists() and not args.out.is_dir():
+        print(f"{prog}: --out {args.out} exists and is not a directory", file=sys.stderr)
+        return 2
+
+    # 2. run (nothing written yet)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from tqdm import tqdm
+
+    from ..fmu.runner import FMUError
+    from ..peers.compare import compare_scenario
+    from ..peers.timeopt import measure
+    from ..results import save_figure, write_csv
+
+    show = not args.quiet and sys.stderr.isatty()
+    results = []
+    current = ""
+    try:
+        for sc in tqdm(scenarios, disable=not show, desc="scenarios", leave=False):
+            current = sc.name
+            results.append(compare_scenario(sc, peers=peers))
+        table_t = None
+        if args.timeopt:
+            current = "time-optimal measurement"
+            fmu = scenarios[0].simulation.fmu
+            table_t = measure(args.timeopt, fmu=fmu, progress=show)
+    except (FMUError, ValueError, RuntimeError, OSError) as e:
+        print(f"{prog}: run failed ({current}): {e}", file=sys.stderr)
+        return 1
+
+    texts = [r.table() for r in results]
+    if table_t is not None:
+        texts.append("FIR-built profiles against the time-optimal JL (ruckig), random moves "
+                     f"({args.timeopt} per case; case I: v_max and a_max reached, II: a_max "
+                     "only, III: neither, IV: v_max only):\n" + table_t.to_text())
+    summary = "\n\n".join(texts)
+
+    # 3. write everything
+    out: Path = args.out
+    written: list[Path] = []
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        for stem, r in zip(stems, results, strict=True):
+            written.append(r.to_csv(out / f"{stem}.csv"))
+            written.append(write_csv(out / f"{stem}-robustness.csv", r.robustness_rows()))
+            if not args.no_plot:
+                written.append(save_figure(r.plot(), out / f"{stem}-robustness.png"))
+                written.append(save_figure(r.plot_runs(), out / f"{stem}-runs.png"))
+        if table_t is not None:
+            rows = [{"method": m.method, "case": m.case, "distance_m": m.distance,
+                     "v_max_m_s": m.v_max, "a_max_m_s2": m.a_max, "j_max_m_s3": m.j_max,
+                     "T_F1_s": m.T_F[0], "T_F2_s": m.T_F[1], "T_F3_s": m.T_F[2],
+                     "T_F4_s": m.T_F[3], "T_opt_s": m.T_opt, "T_fmu_s": m.T_fmu,
+                     "excess_samples": m.excess_samples, "excess_pct": m.excess_percent}
+                    for m in table_t.rows]
+            written.append(write_csv(out / "timeopt.csv", rows))
+        tmp = out / ".summary.txt.tmp"
+        tmp.write_text(summary + "\n", encoding="utf-8")
+        tmp.replace(out / "summary.txt")
+        written.append(out / "summary.txt")
+    except OSError as e:
+        for pth in written:
+            pth.unlink(missing_ok=True)
+        print(f"{prog}: cannot write the outputs in {out}: {e}", file=sys.stderr)
+        return 1
+
+    if not args.quiet:
+        print(summary)
+        print()
+    print(f"wrote {len(written)} files in {out}/: " + ", ".join(p.name for p in written))
+    return 0
