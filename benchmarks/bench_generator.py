@@ -99,6 +99,9 @@ def main() -> int:
         subprocess.run(["gcc", *flags, f"-I{fmu_src_dir()}", str(src),
                         str(fmu_src_dir() / "djl_core.c"), "-o", str(exe), "-lm"], check=True)
         stream = {T_F: bench_stream(T_F, r, exe) for T_F in JERK_TIMES}
+        plans = {prof: float(subprocess.run([str(exe), "plan", str(prof), "0.4", "20000"],
+                                            capture_output=True, text=True,
+                                            check=True).stdout) for prof in (1, 2, 3)}
 
     print(f"JL move: {DISTANCE:g} m at 1 m/s, Te = {TE * 1e3:g} ms; medians of {r} runs\n")
     print(f"{'measurement':58s} {'T_F = 10 ms':>14s} {'T_F = 1 s':>14s} {'ratio':>7s}")
@@ -114,6 +117,8 @@ def main() -> int:
     per = {T_F: s / n for T_F, (n, s) in stream.items()}
     print(f"{'C core, every sample computed (controller loop) [samples/s]':58s} "
           f"{rate[0.01]:14.3e} {rate[1.0]:14.3e} {per[1.0] / per[0.01]:7.2f}")
+    for prof, name in ((1, "AL"), (2, "JL"), (3, "DJL")):
+        print(f"{f'C core, planning a 0.4 m {name} move [us]':58s} {plans[prof] * 1e6:14.2f}")
     for v in (2, 3):
         us = bench_fmu_per_sample(v, 20000, max(3, r // 2)) * 1e6
         print(f"{f'FMI {v}.0 via fmpy, doStep(h=Te)+getReal per sample [us]':58s} {us:14.2f}")

@@ -15,6 +15,7 @@ Examples
 from __future__ import annotations
 
 import ctypes
+import math
 import shutil
 import tempfile
 from collections.abc import Iterable, Mapping, Sequence
@@ -288,6 +289,36 @@ class GeneratorFMU:
         self._initialized = True
         self._call(self.fmu.exitInitializationMode)
 
+    def replan(self, params: Mapping[str, ParamValue] | None = None,
+               start_time: float | None = None) -> None:
+        """Reset the instance, set ``params`` (the rest at start values) and initialise again.
+
+        Re-planning an instance costs tens of microseconds, against tens of
+        milliseconds to create one (unzip and load): use it for parameter sweeps.
+
+        Parameters
+        ----------
+        params : mapping, optional
+            Parameters by name.
+        start_time : float, optional
+            New FMU start time (default: keep the current one).
+        """
+        if start_time is not None:
+            self._start = float(start_time)
+        self._call(self.fmu.reset)
+        self._initialized = False
+        self.start_time = self._start
+        self.time = self._start
+        if self.fmi_version == 2:
+            self._call(self.fmu.setupExperiment, startTime=self._start)
+        if params:
+            self.set(params)
+        self.initialize()
+
+    def motion_start(self) -> float:
+        """Time of the generator sample at which the motion starts (see :func:`motion_start`)."""
+        return motion_start(float(self.get("t_start")), self._start, float(self.get("Te")))
+
     def do_step(self, h: float) -> None:
         """Advance the FMU by ``h`` seconds (a whole multiple of ``Te``)."""
         self._call(self.fmu.doStep, currentCommunicationPoint=self.time, communicationStepSize=h)
@@ -350,6 +381,18 @@ class GeneratorFMU:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def motion_start(t_start: float, start_time: float, Te: float) -> float:
+    """First generator sample (``start_time + k Te``) at or after ``t_start``.
+
+    The FMU starts the motion there: its sampling grid is anchored at the FMU
+    start time.
+    """
+    k = (t_start - start_time) / Te
+    kr = round(k)
+    k = kr if abs(k - kr) <= 1e-9 * (1.0 + abs(k)) else math.ceil(k)
+    return start_time + k * Te
 
 
 @dataclass
@@ -440,7 +483,7 @@ def generate(
     params : mapping, optional
         Parameters by FMU variable name; the FMU's start values for the rest.
     t_stop : float, optional
-        End time; by default the end of the motion plus 10 samples.
+        End time; by default ten communication steps after the end of the motion.
     dt : float, optional
         Communication step (a whole multiple of ``Te``); default ``Te``.
     fmi_version : {2, 3}
@@ -465,8 +508,11 @@ def generate(
         motion_time = float(g.get("motion_time"))
         t_start = float(g.get("t_start"))
         if t_stop is None:
-            t_stop = max(t_start, start_time) + motion_time + 10 * Te
-        n = int(round((t_stop - start_time) / step))
+            # ten communication steps past the end (the start rounds up to a sample)
+            t_end = max(motion_start(t_start, start_time, Te), start_time) + motion_time
+            n = math.ceil((t_end - start_time) / step - 1e-9) + 10
+        else:
+            n = int(round((t_stop - start_time) / step))
         vrs = g.vr(REAL_OUTPUTS)
         vr_done = g.variable("done").valueReference
         vr_seg = g.variable("segment").valueReference
