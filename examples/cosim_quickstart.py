@@ -1,6 +1,6 @@
 """Co-simulation quickstart: AL / JL / DJL on a flexible axis whose mode moves with Z.
 
-Run:  python examples/cosim_quickstart.py   (writes cosim_quickstart.png here)
+Run:  python examples/cosim_quickstart.py   (writes djl-fmu-out/cosim_quickstart.png)
 
 1. the embedded scenario "X" of the paper (Béarée & Olabi 2013, §4) in one call;
 2. the same axis built in Python: a lookup-table mode map, a heavier load, a second
@@ -11,6 +11,7 @@ Run:  python examples/cosim_quickstart.py   (writes cosim_quickstart.png here)
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import matplotlib
 
@@ -25,7 +26,8 @@ from harness.scenario import load_scenario  # noqa: E402
 result = run_scenario("X")
 print(result.table())
 fig = result.plot()
-fig.savefig("cosim_quickstart.png", dpi=100)
+Path("djl-fmu-out").mkdir(exist_ok=True)
+fig.savefig("djl-fmu-out/cosim_quickstart.png", dpi=100)
 
 # 2. my axis: a modal survey (z, f) instead of the linear law, a load 20 % heavier
 #    (period ∝ √mass), and a 30 Hz second mode; FMI 3.0 FMU

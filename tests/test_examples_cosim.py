@@ -18,4 +18,4 @@ def test_cosim_quickstart(tmp_path, capsys):
         os.chdir(cwd)
     out = capsys.readouterr().out
     assert "DJL compared with JL" in out
-    assert (tmp_path / "cosim_quickstart.png").stat().st_size > 10_000
+    assert (tmp_path / "djl-fmu-out" / "cosim_quickstart.png").stat().st_size > 10_000
