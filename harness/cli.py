@@ -17,10 +17,19 @@ COMMANDS = ("build", "demo", "simulate", "report", "compare")
 
 EPILOG = """\
 typical use:
+  djl-fmu simulate
+      the main job: AL/JL/DJL on the paper's default scenarios; tables and plots in
+      ./djl-fmu-out/simulate (also writes the two FMUs there)
+  djl-fmu simulate my_axis.toml
+      your moves and mode map (scenario format: docs/harness.md)
   djl-fmu build --fmi-version 3 -o out/JerkLimitedTrajectory.fmu
       write an FMI 3.0 co-simulation FMU (binary for this platform + C sources)
+  djl-fmu report
+      check the papers' filtering claims against the FMU, write report.html
+  djl-fmu compare
+      AL/JL/DJL against time-optimal JL, Sato, input shapers, damped jerk
   djl-fmu demo
-      build both FMUs, validate them and run the default DJL move through fmpy
+      the generator alone: build both FMUs, validate, run the default DJL move
 
 Run 'djl-fmu <command> --help' for the options of a command.
 Units are SI throughout (m, s, m/s, m/s2, m/s3, Hz).

@@ -10,6 +10,9 @@ import matplotlib
 import pytest
 from hypothesis import settings
 
+# default: reproducible examples (CI runs the same cases every time);
+# HYPOTHESIS_PROFILE=thorough: fresh random examples, ten times as many.
+settings.register_profile("default", derandomize=True, deadline=None)
 settings.register_profile("thorough", max_examples=2000, deadline=None)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "default"))
 

@@ -65,6 +65,9 @@ def test_one_jerk_stage_formula_against_solve_ivp(f, T_F, zeta):
 @given(steps=st.lists(st.floats(-50.0, 50.0), min_size=1, max_size=5),
        gaps=st.lists(st.floats(0.005, 0.08), min_size=6, max_size=6),
        zeta=st.floats(0.0, 0.2))
+@pytest.mark.filterwarnings(
+    # all-zero jerk steps: the solution is identically 0 and solve_ivp's error norm is 0/0
+    "ignore:invalid value encountered in scalar divide:RuntimeWarning")
 def test_jerk_series_formula_against_solve_ivp(steps, gaps, zeta):
     dj = np.r_[steps, -np.sum(steps)]  # the jerk returns to zero: constant acceleration after
     ts = np.cumsum(gaps[: dj.size]) - gaps[0]
