@@ -24,13 +24,13 @@ from __future__ import annotations
 
 import argparse
 import statistics
-import subprocess
 import tempfile
 import time
 from pathlib import Path
 
-from harness._resources import fmu_src_dir
-from harness.fmu.build import CFLAGS, default_fmu
+from _common import build_stream, c_plan_seconds, fmu_seconds_per_sample, stream_rate
+
+from harness.fmu.build import default_fmu
 from harness.fmu.runner import GeneratorFMU
 
 TE = 1e-4
@@ -61,29 +61,7 @@ def bench_fmu_long_step(fmi_version: int, T_F: float, repeats: int) -> tuple[int
 
 def bench_fmu_per_sample(fmi_version: int, n: int, repeats: int) -> float:
     """Median seconds per doStep(h = Te) + getReal of x, v, a, j through fmpy."""
-    with GeneratorFMU(default_fmu(fmi_version), params={"Te": TE, "distance": 1.0}) as g:
-        g.initialize()
-        vrs = g.vr(["x", "v", "a", "j"])
-        state = g.get_state()
-        times = []
-        for _ in range(repeats):
-            g.set_state(state, 0.0)
-            t = 0.0
-            t0 = time.perf_counter()
-            for _ in range(n):
-                g.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=TE)
-                g.get_reals(vrs)
-                t += TE
-            times.append((time.perf_counter() - t0) / n)
-        g.free_state(state)
-    return statistics.median(times)
-
-
-def bench_stream(T_F: float, repeats: int, exe: Path) -> tuple[int, float]:
-    out = subprocess.run([str(exe), repr(T_F), repr(TE), repr(DISTANCE), str(repeats)],
-                         capture_output=True, text=True, check=True).stdout
-    rows = [line.split() for line in out.splitlines()]
-    return int(rows[0][0]), statistics.median(float(r[1]) for r in rows)
+    return fmu_seconds_per_sample(fmi_version, {"Te": TE, "distance": 1.0}, n, repeats)
 
 
 def main() -> int:
@@ -93,15 +71,14 @@ def main() -> int:
     r = args.repeats
 
     with tempfile.TemporaryDirectory() as tmp:
-        exe = Path(tmp) / "bench_stream"
-        src = Path(__file__).parent / "c" / "bench_stream.c"
-        flags = [f for f in CFLAGS if f not in ("-fPIC", "-fvisibility=hidden")]
-        subprocess.run(["gcc", *flags, f"-I{fmu_src_dir()}", str(src),
-                        str(fmu_src_dir() / "djl_core.c"), "-o", str(exe), "-lm"], check=True)
-        stream = {T_F: bench_stream(T_F, r, exe) for T_F in JERK_TIMES}
-        plans = {prof: float(subprocess.run([str(exe), "plan", str(prof), "0.4", "20000"],
-                                            capture_output=True, text=True,
-                                            check=True).stdout) for prof in (1, 2, 3)}
+        exe = build_stream(Path(tmp))
+        # the two jerk times alternate, so that a load on the shared machine hits both
+        runs: dict[float, list[tuple[int, float]]] = {T_F: [] for T_F in JERK_TIMES}
+        for _ in range(r):
+            for T_F in JERK_TIMES:
+                runs[T_F].append(stream_rate(exe, T_F, TE, DISTANCE, 1))
+        stream = {T_F: (v[0][0], statistics.median(s for _, s in v)) for T_F, v in runs.items()}
+        plans = {prof: c_plan_seconds(exe, prof, 0.4) for prof in (1, 2, 3)}
 
     print(f"JL move: {DISTANCE:g} m at 1 m/s, Te = {TE * 1e3:g} ms; medians of {r} runs\n")
     print(f"{'measurement':58s} {'T_F = 10 ms':>14s} {'T_F = 1 s':>14s} {'ratio':>7s}")

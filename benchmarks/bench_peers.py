@@ -29,10 +29,16 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _common import (
+    build_stream,
+    c_plan_seconds,
+    fmu_seconds_per_sample,
+    seconds_per_call,
+    stream_rate,
+)
 
 from harness.cosim import Session
 from harness.fmu.build import default_fmu
-from harness.fmu.runner import GeneratorFMU
 from harness.peers.compare import cosimulate_reference
 from harness.peers.park import park_profile
 from harness.peers.ruckig_ref import planner, time_optimal
@@ -47,111 +53,56 @@ J_MAX = MOVE["a_max"] / T_F
 
 def fmu_per_sample(n: int, repeats: int) -> float:
     """Median seconds per sample: doStep(h = Te) + getReal(x, v, a, j) through fmpy."""
-    params = dict(MOVE, profile=2, T_F1=T_F, Te=TE)
-    with GeneratorFMU(default_fmu(2), params=params) as g:
-        g.initialize()
-        vrs = g.vr(["x", "v", "a", "j"])
-        state = g.get_state()
-        out = []
-        for _ in range(repeats):
-            g.set_state(state, 0.0)
-            step, get = g.fmu.doStep, g.get_reals
-            t = 0.0
-            t0 = time.perf_counter()
-            for _ in range(n):
-                step(currentCommunicationPoint=t, communicationStepSize=TE)
-                get(vrs)
-                t += TE
-            out.append((time.perf_counter() - t0) / n)
-        g.free_state(state)
-    return statistics.median(out)
+    return fmu_seconds_per_sample(2, dict(MOVE, profile=2, T_F1=T_F, Te=TE), n, repeats)
 
 
 def ruckig_per_sample(n: int, repeats: int) -> float:
     """Median seconds per ``at_time`` call (position, velocity, acceleration)."""
     r = time_optimal(MOVE["distance"], MOVE["v_max"], MOVE["a_max"], J_MAX)
-    at = r.trajectory.at_time
-    ts = (np.arange(n) * (r.duration / n)).tolist()
-    out = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for t in ts:
-            at(t)
-        out.append((time.perf_counter() - t0) / n)
-    return statistics.median(out)
+    return seconds_per_call(r.trajectory.at_time, np.arange(n) * (r.duration / n), repeats)
 
 
-def c_core_rate(repeats: int) -> tuple[float, float] | None:
+def c_core(repeats: int) -> tuple[float, float] | None:
     """Samples/s of the C core computing every sample, and its planning time per JL move (s).
 
     None without gcc.
     """
-    from harness._resources import fmu_src_dir
-    from harness.fmu.build import CFLAGS
-
-    src = Path(__file__).parent / "c" / "bench_stream.c"
-    if not src.is_file():
-        return None
     try:
         with tempfile.TemporaryDirectory() as tmp:
-            exe = Path(tmp) / "bench_stream"
-            flags = [f for f in CFLAGS if f not in ("-fPIC", "-fvisibility=hidden")]
-            subprocess.run(["gcc", *flags, f"-I{fmu_src_dir()}", str(src),
-                            str(fmu_src_dir() / "djl_core.c"), "-o", str(exe), "-lm"],
-                           check=True, capture_output=True)
-            out = subprocess.run([str(exe), repr(0.01), repr(1e-4), repr(1000.0), str(repeats)],
-                                 capture_output=True, text=True, check=True).stdout
-            plan = subprocess.run([str(exe), "plan", "2", repr(MOVE["distance"]), "20000"],
-                                  capture_output=True, text=True, check=True).stdout
+            exe = build_stream(Path(tmp))
+            n, seconds = stream_rate(exe, 0.01, 1e-4, 1000.0, repeats)
+            return n / seconds, c_plan_seconds(exe, 2, MOVE["distance"])
     except (OSError, subprocess.CalledProcessError):
         return None
-    rows = [line.split() for line in out.splitlines()]
-    return int(rows[0][0]) / statistics.median(float(r[1]) for r in rows), float(plan)
+
+
+def _distances(n: int) -> list[float]:
+    return np.random.default_rng(0).uniform(0.05, 1.0, n).tolist()
 
 
 def fmu_plan(n: int, repeats: int) -> float:
     """Median seconds per re-plan of one FMU instance (distances vary)."""
-    rng = np.random.default_rng(0)
-    d = rng.uniform(0.05, 1.0, n).tolist()
-    out = []
     with AxisFMU(default_fmu(2)) as ax:
         base = dict(MOVE, profile=2, T_F1=T_F, Te=TE)
-        ax.plan(base)
-        for _ in range(repeats):
-            t0 = time.perf_counter()
-            for di in d:
-                base["distance"] = di
-                ax.plan(base)
-            out.append((time.perf_counter() - t0) / n)
-    return statistics.median(out)
+        return seconds_per_call(lambda d: ax.plan(dict(base, distance=d)), _distances(n),
+                                repeats)
 
 
 def ruckig_plan(n: int, repeats: int) -> float:
     """Median seconds per ``Ruckig.calculate`` (objects reused, distances vary)."""
     otg, inp, traj = planner(MOVE["v_max"], MOVE["a_max"], J_MAX)
-    rng = np.random.default_rng(0)
-    d = rng.uniform(0.05, 1.0, n).tolist()
-    out = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for di in d:
-            inp.target_position = [di]
-            otg.calculate(inp, traj)
-        out.append((time.perf_counter() - t0) / n)
-    return statistics.median(out)
+
+    def plan(d: float) -> None:
+        inp.target_position = [d]
+        otg.calculate(inp, traj)
+
+    return seconds_per_call(plan, _distances(n), repeats)
 
 
 def park_plan(n: int, repeats: int) -> float:
     """Median seconds per closed-form plan (Python)."""
-    rng = np.random.default_rng(0)
-    d = rng.uniform(0.05, 1.0, n).tolist()
-    out = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for di in d:
-            park_profile(di, MOVE["v_max"], MOVE["a_max"], J_MAX)
-        out.append((time.perf_counter() - t0) / n)
-    return statistics.median(out)
+    return seconds_per_call(lambda d: park_profile(d, MOVE["v_max"], MOVE["a_max"], J_MAX),
+                            _distances(n), repeats)
 
 
 def cosim_rtf(repeats: int, t_stop: float = 10.0) -> tuple[float, float]:
@@ -183,7 +134,7 @@ def main() -> int:
 
     fs = fmu_per_sample(20000, r)
     rs = ruckig_per_sample(20000, r)
-    cc = c_core_rate(r)
+    cc = c_core(r)
     print(f"{'':44s}{'FMU (C)':>14s}{'ruckig':>14s}{'FMU/ruckig':>12s}")
     print(f"{'samples/s, one at a time from Python':44s}{1 / fs:14.3e}{1 / rs:14.3e}"
           f"{rs / fs:12.2f}")

@@ -73,8 +73,7 @@ const char *djl_status_name(djl_status s)
 
 void djl_params_default(djl_params *p)
 {
-    int i;
-    memset(p, 0, sizeof(*p));
+    memset(p, 0, sizeof(*p)); /* also: no segments, all segment arrays 0 */
     p->profile = DJL_PROFILE_DJL;
     p->short_stage = DJL_SHORT_STRETCH;
     p->Te = 1e-3;
@@ -90,11 +89,6 @@ void djl_params_default(djl_params *p)
     p->T_F[1] = 0.08;
     p->T_F[2] = 0.06;
     p->T_F[3] = 0.05;
-    p->n_segments = 0;
-    for (i = 0; i < DJL_MAX_SEGMENTS; i++) {
-        p->seg_distance[i] = 0.0;
-        p->seg_v_end[i] = 0.0;
-    }
 }
 
 /* ------------------------------------------------------------------------ */
@@ -449,15 +443,7 @@ static int solve_b1(const sctx *c0, ssol *out)
 /* Branches 2 (v_p between the end velocities: two stages in the same
  * direction) and 3 (v_p below both: a dip), used to land exactly when the
  * time-optimal shape cannot. */
-static int solve_b23_(const sctx *c, int branch, ssol *out);
-static int solve_b23(const sctx *c0, int branch, ssol *out)
-{
-    sctx c = *c0;
-    if (solve_b23_(&c, branch, out)) return 1;
-    c.merge23 = 1;
-    return solve_b23_(&c, branch, out);
-}
-static int solve_b23_(const sctx *c, int branch, ssol *out)
+static int solve_b23_once(const sctx *c, int branch, ssol *out)
 {
     double lo, hi, vp, kx;
     int p;
@@ -500,6 +486,15 @@ static int solve_b23_(const sctx *c, int branch, ssol *out)
         }
     }
     return 0;
+}
+
+/* Try first with ramps 2 and 3 kept apart, then letting them merge (kmin). */
+static int solve_b23(const sctx *c0, int branch, ssol *out)
+{
+    sctx c = *c0;
+    if (solve_b23_once(&c, branch, out)) return 1;
+    c.merge23 = 1;
+    return solve_b23_once(&c, branch, out);
 }
 
 /* Single-stage (or pure cruise) profile at v_p = max(vs, ve) with the cruise
@@ -713,7 +708,6 @@ typedef struct {
     double level;   /* AL acceleration right after this step */
     int phase_end;  /* ends a phase: v_after is the velocity once it has settled */
     double v_after;
-    int32_t seg;    /* 1-based */
 } step_t;
 
 typedef struct {
@@ -861,7 +855,7 @@ static djl_status plan_last(work_t *w, const djl_params *p, int n, djl_error *er
 }
 
 static void add_step(work_t *w, int64_t tau, double A, int32_t N, double level, int phase_end,
-                     double v_after, int seg)
+                     double v_after)
 {
     step_t *st;
     if (A == 0.0) return;
@@ -872,7 +866,6 @@ static void add_step(work_t *w, int64_t tau, double A, int32_t N, double level, 
     st->level = level;
     st->phase_end = phase_end;
     st->v_after = v_after;
-    st->seg = seg;
 }
 
 static void sort_unique(int64_t *a, int *n)
@@ -1028,23 +1021,23 @@ djl_status djl_plan_motion(const djl_params *p, djl_plan *plan, djl_error *err)
             int64_t nn = s->hasA ? s->n1 : s->m;
             double vend = w.vE[i];
             if (s->split == 0) {
-                add_step(&w, t0, sg * lv, Na, sg * lv, 0, 0.0, i + 1);
-                add_step(&w, t0 + nn, -sg * (lv - fl), Nb, sg * fl, fl == 0.0, vend, i + 1);
-                add_step(&w, t0 + nn + 1, -sg * fl, Nb, 0.0, 1, vend, i + 1);
+                add_step(&w, t0, sg * lv, Na, sg * lv, 0, 0.0);
+                add_step(&w, t0 + nn, -sg * (lv - fl), Nb, sg * fl, fl == 0.0, vend);
+                add_step(&w, t0 + nn + 1, -sg * fl, Nb, 0.0, 1, vend);
             } else {
-                add_step(&w, t0, sg * (lv - fl), Na, sg * (lv - fl), 0, 0.0, i + 1);
-                add_step(&w, t0 + 1, sg * fl, Na, sg * lv, 0, 0.0, i + 1);
-                add_step(&w, t0 + nn + 1, -sg * lv, Nb, 0.0, 1, vend, i + 1);
+                add_step(&w, t0, sg * (lv - fl), Na, sg * (lv - fl), 0, 0.0);
+                add_step(&w, t0 + 1, sg * fl, Na, sg * lv, 0, 0.0);
+                add_step(&w, t0 + nn + 1, -sg * lv, Nb, 0.0, 1, vend);
             }
         } else {
             if (s->hasA) {
-                add_step(&w, S + s->g, sg * s->al, s->N1, sg * s->al, 0, 0.0, i + 1);
-                add_step(&w, S + s->g + s->n1, -sg * s->al, s->N2, 0.0, 1, sg * s->vp, i + 1);
+                add_step(&w, S + s->g, sg * s->al, s->N1, sg * s->al, 0, 0.0);
+                add_step(&w, S + s->g + s->n1, -sg * s->al, s->N2, 0.0, 1, sg * s->vp);
             }
             if (s->hasD) {
                 int64_t t3 = S + s->g + (s->hasA ? s->n1 : 0) + s->k;
-                add_step(&w, t3, -sg * s->dl, s->N3, -sg * s->dl, 0, 0.0, i + 1);
-                add_step(&w, t3 + s->m, sg * s->dl, s->N4, 0.0, 1, w.vE[i], i + 1);
+                add_step(&w, t3, -sg * s->dl, s->N3, -sg * s->dl, 0, 0.0);
+                add_step(&w, t3 + s->m, sg * s->dl, s->N4, 0.0, 1, w.vE[i]);
             }
         }
         if (fabs(s->vp) > plan->v_reached) plan->v_reached = fabs(s->vp);

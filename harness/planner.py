@@ -141,7 +141,6 @@ class AxisFMU:
         self._fresh = True
         self.params: dict[str, Any] = {}
         self.start_time = 0.0
-        self._vr_out = self.g.vr(["x", "v", "a", "j", "a_AL"])
 
     @property
     def fmi_version(self) -> int:
@@ -198,16 +197,9 @@ class AxisFMU:
         if t_stop is None:
             t_stop = max(g.motion_start(), start_time) + motion_time
         n = int(round((t_stop - start_time) / Te))
-        rows = np.empty((n + 1, 5))
-        get, step, vrs = self.g.get_reals, g.fmu.doStep, self._vr_out
-        t = start_time + Te * np.arange(n + 1)
-        rows[0] = get(vrs)
-        for k in range(1, n + 1):
-            step(t[k - 1], Te)
-            rows[k] = get(vrs)
-        g.time = float(t[-1])
-        return MoveSamples(t, rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4],
-                           motion_time, self.N_F(), t_start)
+        t, v = g.record(n, Te, ("x", "v", "a", "j", "a_AL"))
+        return MoveSamples(t, v["x"], v["v"], v["a"], v["j"], v["a_AL"], motion_time,
+                           self.N_F(), t_start)
 
     def close(self) -> None:
         """Free the FMU instance."""

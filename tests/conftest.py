@@ -23,6 +23,15 @@ _CACHE = tempfile.mkdtemp(prefix="djl-fmu-test-cache-")
 os.environ.setdefault("DJL_FMU_CACHE", _CACHE)
 
 
+@pytest.fixture(autouse=True)
+def _close_figures():
+    """Results hand out open matplotlib figures (``.plot()``): close them after each test."""
+    yield
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+
+
 @pytest.fixture(scope="session")
 def fmu_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return tmp_path_factory.mktemp("fmus")

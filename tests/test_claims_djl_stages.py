@@ -18,15 +18,6 @@ from harness.claims.djl_stages import filtered_steps, ramp
 from harness.fmu.runner import generate
 
 
-@pytest.fixture(autouse=True)
-def _close_figures():
-    """The claims return open matplotlib figures: close them after each test."""
-    yield
-    import matplotlib.pyplot as plt
-
-    plt.close("all")
-
-
 def test_filtered_steps_of_a_synthetic_profile():
     a_AL = np.r_[np.full(5, 2.0), np.zeros(3), np.full(4, -3.0), np.zeros(6)]
     steps = filtered_steps(a_AL, (2, 3, 4, 5))

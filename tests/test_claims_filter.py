@@ -26,15 +26,6 @@ from harness.claims.signals import (
 from harness.fmu.runner import generate
 
 
-@pytest.fixture(autouse=True)
-def _close_figures():
-    """The claims return open matplotlib figures: close them after each test."""
-    yield
-    import matplotlib.pyplot as plt
-
-    plt.close("all")
-
-
 def _ft_quad(fun, t0: float, t1: float, f: float) -> complex:
     w = 2 * np.pi * f
     re = quad(lambda t: fun(t) * np.cos(w * t), t0, t1, limit=400, epsabs=1e-13)[0]

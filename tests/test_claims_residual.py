@@ -20,15 +20,6 @@ from harness.claims import formulas as fm
 from harness.claims.time_varying import frequency_law, phase_only_residual
 
 
-@pytest.fixture(autouse=True)
-def _close_figures():
-    """The claims return open matplotlib figures: close them after each test."""
-    yield
-    import matplotlib.pyplot as plt
-
-    plt.close("all")
-
-
 def _integrate(acc, jerk_breaks, omega_of_t, zeta, t_end):
     """State (eps, eps') at t_end of eps'' + 2 zeta w eps' + w^2 eps = -acc(t)."""
 

@@ -22,15 +22,6 @@ from harness.claims import vibration_filters as vf
 from harness.fmu.runner import generate
 
 
-@pytest.fixture(autouse=True)
-def _close_figures():
-    """The claims return open matplotlib figures: close them after each test."""
-    yield
-    import matplotlib.pyplot as plt
-
-    plt.close("all")
-
-
 @settings(max_examples=40, deadline=None)
 @given(f=st.floats(1.0, 50.0), zeta=st.floats(0.0, 0.5), x=st.floats(0.0, 10.0))
 def test_zv_eq22_is_the_shaper_magnitude(f, zeta, x):

@@ -18,15 +18,6 @@ from harness.claims import Settings, run_claim
 from harness.claims import formulas as fm
 
 
-@pytest.fixture(autouse=True)
-def _close_figures():
-    """The claims return open matplotlib figures: close them after each test."""
-    yield
-    import matplotlib.pyplot as plt
-
-    plt.close("all")
-
-
 def _ft(acc, breaks, T, Omega):
     """Fourier transform of acc(t) on [0, T] at Omega = omega T / 2 pi (quadrature)."""
     w = 2 * np.pi * Omega / T

@@ -296,6 +296,7 @@ def test_start_time_and_t_start(fmu):
     late = generate({"profile": 2, "t_start": 10.25}, fmu=fmu, start_time=10.0)
     k = round(0.25 / 1e-3)
     assert np.all(late.x[:k + 1] == 0.0)
+    assert late.t_end == pytest.approx(late.t[late.done.argmax()], abs=1e-9)
     n = len(base.t)
     for name in ("x", "v", "a", "j"):
         np.testing.assert_array_equal(getattr(late, name)[k:k + n], getattr(base, name))
@@ -305,6 +306,7 @@ def test_t_start_between_samples_starts_at_the_next_sample(fmu):
     tr = generate({"profile": 2, "t_start": 0.1234}, fmu=fmu, debug_logging=True)
     moving = np.nonzero(tr.j)[0]
     assert tr.t[moving[0]] == pytest.approx(0.124)
+    assert tr.t_end == pytest.approx(tr.t[tr.done.argmax()], abs=1e-12)
     assert any("not a sample of the generator" in r.message for r in tr.log)
     check_end_and_limits(tr)
 

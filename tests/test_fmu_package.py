@@ -134,6 +134,16 @@ def test_cli_build_writes_a_valid_fmu(tmp_path):
     assert validate_fmu(str(out)) == []
 
 
+def test_cli_build_to_an_unwritable_place(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    proc = subprocess.run([sys.executable, "-m", "harness.cli", "build", "--fmi-version", "2",
+                           "-o", str(blocker / "x.fmu")], capture_output=True, text=True)
+    assert proc.returncode == 1
+    assert "cannot write" in proc.stderr and "Traceback" not in proc.stderr
+    assert list(tmp_path.iterdir()) == [blocker]
+
+
 def test_cli_build_refuses_bad_version(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "harness.cli", "build", "--fmi-version", "4",
                            "-o", str(tmp_path / "x.fmu")], capture_output=True, text=True)

@@ -23,12 +23,6 @@ from harness.peers.ruckig_ref import time_optimal
 J, A, V = 5000.0, 3000.0, 6000.0  # the paper's §4 (degrees)
 
 
-@pytest.fixture(autouse=True)
-def _close_figures():
-    yield
-    import matplotlib.pyplot as plt
-
-    plt.close("all")
 
 
 def test_paper_parameters():

@@ -25,12 +25,6 @@ F = 30.0
 W = 2 * math.pi * F
 
 
-@pytest.fixture(autouse=True)
-def _close_figures():
-    yield
-    import matplotlib.pyplot as plt
-
-    plt.close("all")
 
 
 def integrate_jerks(T, J):

@@ -14,12 +14,6 @@ from harness.peers.timeopt import compare_move, measure, random_move
 TE = 1e-3
 
 
-@pytest.fixture(autouse=True)
-def _close_figures():
-    yield
-    import matplotlib.pyplot as plt
-
-    plt.close("all")
 
 
 def case_moves(case: str):

@@ -13,15 +13,6 @@ from harness.cli import main
 from harness.report import write_report
 
 
-@pytest.fixture(autouse=True)
-def _close_figures():
-    """The claims return open matplotlib figures: close them after each test."""
-    yield
-    import matplotlib.pyplot as plt
-
-    plt.close("all")
-
-
 def _fake(kind: str, passed: bool):
     def run(settings):
         import matplotlib.pyplot as plt
@@ -144,3 +135,14 @@ def test_report_gains_the_peer_comparison(tmp_path):
         assert method in html
     assert html.count("data:image/png;base64,") == 2
     assert "raised" not in html
+
+
+def test_cli_refuses_a_file_that_is_not_a_generator_fmu(tmp_path, capsys):
+    from harness.cli import main
+
+    junk = tmp_path / "junk.fmu"
+    junk.write_text("x")
+    out = tmp_path / "r.html"
+    assert main(["report", "--fmu", str(junk), "-o", str(out), "--fast"]) == 2
+    assert "cannot read" in capsys.readouterr().err
+    assert not out.exists()

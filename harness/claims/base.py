@@ -343,3 +343,13 @@ def run_claims(settings: Settings | None = None, only: Sequence[int] | None = No
             on_result(res)
         out.append(res)
     return out
+
+
+def dress(ax, xlabel: str, ylabel: str, title: str | None = None) -> None:
+    """Label a claim figure's axes, title it, and add the legend and grid they all use."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    if title is not None:
+        ax.set_title(title)
+    ax.legend(fontsize="x-small")
+    ax.grid(True, alpha=0.3)

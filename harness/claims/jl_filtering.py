@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import formulas as fm
-from .base import Check, ClaimResult, Settings, Table, register
+from .base import Check, ClaimResult, Settings, Table, dress, register
 from .signals import rfft_spectrum
 
 TITLE = "JL = AL * moving average"
@@ -103,22 +103,14 @@ class JLFilterAnalysis:
         ax.plot(m.t, m.a, lw=1.5, label="a (FMU, JL output)")
         ax.plot(m.t, _moving_sum(m.a_AL, m.N, 0.0), "k:", lw=1,
                 label=f"moving average of a_AL (N = {m.N})")
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel("a [m/s²]")
-        ax.set_title(f"{m.name}: acceleration")
-        ax.legend(fontsize="x-small")
-        ax.grid(True, alpha=0.3)
+        dress(ax, "t [s]", "a [m/s²]", f"{m.name}: acceleration")
 
         ax = axes[0, 1]
         shaper = (m.a_AL - np.r_[np.zeros(m.N), m.a_AL[:-m.N]]) / (m.N * m.Te)
         ax.step(m.t, m.j, where="post", lw=1.5, label="j (FMU, JL output)")
         ax.step(m.t, shaper, where="post", ls=":", color="k", lw=1,
                 label="(a_AL(t) - a_AL(t - T_F)) / T_F: two-impulse shaper")
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel("j [m/s³]")
-        ax.set_title("Jerk = AL acceleration through the shaper (Fig. 7)")
-        ax.legend(fontsize="x-small")
-        ax.grid(True, alpha=0.3)
+        dress(ax, "t [s]", "j [m/s³]", "Jerk = AL acceleration through the shaper (Fig. 7)")
 
         ax = axes[1, 0]
         sel = (m.f > 0) & (m.f <= 5.0 / (m.N * m.Te))
@@ -143,11 +135,8 @@ class JLFilterAnalysis:
         ax.plot([], [], "k:", label="eq. (15) of the AL input × |sinc(ω T_j/2)|")
         ax.set_ylim(1e-4, 10)
         ax.set_xlim(0, 20)
-        ax.set_xlabel("Ω = ω T / 2π")
-        ax.set_ylabel("|Q̈(Ω)| [m/s]")
-        ax.set_title("Béarée 2014: eq. (16) = eq. (15) × filter (P = 1 m, T = 1 s)")
-        ax.legend(fontsize="x-small")
-        ax.grid(True, alpha=0.3)
+        dress(ax, "Ω = ω T / 2π", "|Q̈(Ω)| [m/s]",
+              "Béarée 2014: eq. (16) = eq. (15) × filter (P = 1 m, T = 1 s)")
         fig.tight_layout()
         return fig
 

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import formulas as fm
-from .base import Check, ClaimResult, Settings, Table, register
+from .base import Check, ClaimResult, Settings, Table, dress, register
 from .signals import db, dtft, refine_maximum, refine_minimum
 
 TITLE = "The moving average is a comb notch"
@@ -116,11 +116,7 @@ class MovingAverageAnalysis:
         ax.plot(t, c.h_ct[: t.size], "o", ms=3, mfc="none",
                 label="ct.impulse_response of eq. (7)")
         ax.plot(t, c.h_fmu, ".", ms=3, color="k", label="FMU: JL jerk / acceleration step")
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel("impulse response [1/s]")
-        ax.set_title("Impulse response (unit-area impulse)")
-        ax.legend(fontsize="x-small")
-        ax.grid(True, alpha=0.3)
+        dress(ax, "t [s]", "impulse response [1/s]", "Impulse response (unit-area impulse)")
 
         ax = axes[1, 1]
         for cc, style in zip(self.cases, ("-", "--"), strict=False):
@@ -131,11 +127,7 @@ class MovingAverageAnalysis:
             for k in range(1, 4):
                 ax.axvline(k / cc.T_F, color="tab:red", lw=0.6, ls=style)
         ax.set_ylim(-100, 0)
-        ax.set_xlabel("f [Hz]")
-        ax.set_ylabel("|F| [dB]")
-        ax.set_title("Notches: red lines at k/T_F; minima at k/(N T_e)")
-        ax.legend(fontsize="x-small")
-        ax.grid(True, alpha=0.3)
+        dress(ax, "f [Hz]", "|F| [dB]", "Notches: red lines at k/T_F; minima at k/(N T_e)")
         fig.tight_layout()
         return fig
 

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..plant import Mode, free_amplitude, simulate_mode
 from . import formulas as fm
-from .base import Check, ClaimResult, Settings, Table, register
+from .base import Check, ClaimResult, Settings, Table, dress, register
 
 TITLE = "Residual vibration of jerk stages"
 SOURCE = "Béarée & Olabi 2013, §3.1, eq. (17)-(21), Fig. 11"
@@ -103,11 +103,8 @@ class ResidualAnalysis:
         ax.plot([], [], "ko", mfc="none", ms=4, label="FMU JL + harness mode (simulated)")
         ax.axhline(20, color="0.5", lw=0.8, ls="--")
         ax.axvspan(0.8, 1.2, color="tab:red", alpha=0.08, label="tuning error ±20 %")
-        ax.set_xlabel("jerk time / natural period, T_F / T")
-        ax.set_ylabel("residual [% of AL]")
-        ax.set_title(f"Fig. 11: one jerk stage, mode {self.f_mode:g} Hz")
-        ax.legend(fontsize="x-small")
-        ax.grid(True, alpha=0.3)
+        dress(ax, "jerk time / natural period, T_F / T", "residual [% of AL]",
+              f"Fig. 11: one jerk stage, mode {self.f_mode:g} Hz")
 
         ax = axes[0, 1]
         zz = np.linspace(0.0, 0.3, 121)
@@ -125,11 +122,8 @@ class ResidualAnalysis:
         for m in self.moves:
             if m.zeta == 0.0:
                 ax.plot(m.t, m.eps * 1e3, lw=1, label=f"{m.name}: {100 * m.simulated:.2f} %")
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel("ε [mm]")
-        ax.set_title(f"Deflection on the {self.f_mode:g} Hz mode (ζ = 0), FMU moves")
-        ax.legend(fontsize="x-small")
-        ax.grid(True, alpha=0.3)
+        dress(ax, "t [s]", "ε [mm]",
+              f"Deflection on the {self.f_mode:g} Hz mode (ζ = 0), FMU moves")
 
         ax = axes[1, 1]
         names = [f"{m.name}\nζ = {m.zeta:g}" for m in self.moves]

@@ -38,6 +38,9 @@ def run(args: argparse.Namespace) -> int:
     except BuildError as e:
         print(f"djl-fmu build: {e}", file=sys.stderr)
         return 1
+    except OSError as e:
+        print(f"djl-fmu build: cannot write {args.output}: {e.strerror or e}", file=sys.stderr)
+        return 1
     if not args.no_validate:
         from fmpy.validation import validate_fmu
 

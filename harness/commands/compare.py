@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import re
 import sys
 from pathlib import Path
 
@@ -90,57 +89,52 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _safe(name: str) -> str:
-    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_") or "scenario"
-
-
 def run(args: argparse.Namespace) -> int:
     """Check the inputs, run every comparison, then write the outputs; return the exit status."""
+    from ._common import CommandError
+
+    try:
+        return _run(args)
+    except CommandError as e:
+        print(f"djl-fmu compare: {e}", file=sys.stderr)
+        return e.status
+
+
+def _run(args: argparse.Namespace) -> int:
     from ..peers.compare import PEERS, stationary_variant
     from ..peers.ruckig_ref import ruckig_available
-    from ..scenario import ScenarioError, load_scenario
+    from ._common import (
+        CommandError,
+        check_stems,
+        load_scenarios,
+        report_written,
+        safe_stem,
+        write_outputs,
+    )
 
-    prog = "djl-fmu compare"
     # 1. check everything first
     if not ruckig_available():
-        print(f"{prog}: needs the 'ruckig' package for the time-optimal reference: "
-              "pip install 'djl-fmu[compare]'", file=sys.stderr)
-        return 2
+        raise CommandError(2, "needs the 'ruckig' package for the time-optimal reference: "
+                              "pip install 'djl-fmu[compare]'")
     peers = PEERS
     if args.peers:
         peers = tuple(x.strip() for x in args.peers.split(",") if x.strip())
         bad = [x for x in peers if x not in PEERS]
         if bad or not peers:
-            print(f"{prog}: unknown peer(s) {bad}; choose from: {', '.join(PEERS)}",
-                  file=sys.stderr)
-            return 2
+            raise CommandError(2, f"unknown peer(s) {bad}; choose from: {', '.join(PEERS)}")
     if args.timeopt < 0:
-        print(f"{prog}: --timeopt must be >= 0", file=sys.stderr)
-        return 2
-    names = args.scenarios or ["X", "Y"]
-    try:
-        scenarios = [load_scenario(n) for n in names]
-        if args.fmu is not None or args.fmi_version is not None:
-            scenarios = [s.with_fmu(args.fmu, args.fmi_version) for s in scenarios]
-    except ScenarioError as e:
-        print(f"{prog}: {e}", file=sys.stderr)
-        return 2
+        raise CommandError(2, "--timeopt must be >= 0")
+    scenarios, _ = load_scenarios(args.scenarios or ["X", "Y"], args.fmu, args.fmi_version,
+                                  args.out)
     sweeps = [s.name for s in scenarios if s.is_sweep]
     if sweeps:
-        print(f"{prog}: {', '.join(sweeps)}: sweeps are not compared (give single-move "
-              "scenarios such as X or Y)", file=sys.stderr)
-        return 2
+        raise CommandError(2, f"{', '.join(sweeps)}: sweeps are not compared (give "
+                              "single-move scenarios such as X or Y)")
     if not args.no_stationary:
         scenarios = [v for s in scenarios for v in
                      ((s, stationary_variant(s)) if s.z.moves else (s,))]
-    stems = [_safe(s.name) for s in scenarios]
-    if len(set(stems)) != len(stems):
-        print(f"{prog}: two scenarios have the same name: "
-              + ", ".join(s.name for s in scenarios), file=sys.stderr)
-        return 2
-    if args.out.exists() and not args.out.is_dir():
-        print(f"{prog}: --out {args.out} exists and is not a directory", file=sys.stderr)
-        return 2
+        check_stems(scenarios)
+    stems = [safe_stem(s.name) for s in scenarios]
 
     # 2. run (nothing written yet)
     import matplotlib
@@ -163,11 +157,9 @@ def run(args: argparse.Namespace) -> int:
         table_t = None
         if args.timeopt:
             current = "time-optimal measurement"
-            fmu = scenarios[0].simulation.fmu
-            table_t = measure(args.timeopt, fmu=fmu, progress=show)
+            table_t = measure(args.timeopt, fmu=scenarios[0].simulation.fmu, progress=show)
     except (FMUError, ValueError, RuntimeError, OSError) as e:
-        print(f"{prog}: run failed ({current}): {e}", file=sys.stderr)
-        return 1
+        raise CommandError(1, f"run failed ({current}): {e}") from None
 
     texts = [r.table() for r in results]
     if table_t is not None:
@@ -176,11 +168,10 @@ def run(args: argparse.Namespace) -> int:
                      "only, III: neither, IV: v_max only):\n" + table_t.to_text())
     summary = "\n\n".join(texts)
 
-    # 3. write everything
+    # 3. write everything, or nothing
     out: Path = args.out
-    written: list[Path] = []
-    try:
-        out.mkdir(parents=True, exist_ok=True)
+
+    def write(written: list[Path]) -> None:
         for stem, r in zip(stems, results, strict=True):
             written.append(r.to_csv(out / f"{stem}.csv"))
             written.append(write_csv(out / f"{stem}-robustness.csv", r.robustness_rows()))
@@ -195,18 +186,7 @@ def run(args: argparse.Namespace) -> int:
                      "excess_samples": m.excess_samples, "excess_pct": m.excess_percent}
                     for m in table_t.rows]
             written.append(write_csv(out / "timeopt.csv", rows))
-        tmp = out / ".summary.txt.tmp"
-        tmp.write_text(summary + "\n", encoding="utf-8")
-        tmp.replace(out / "summary.txt")
-        written.append(out / "summary.txt")
-    except OSError as e:
-        for pth in written:
-            pth.unlink(missing_ok=True)
-        print(f"{prog}: cannot write the outputs in {out}: {e}", file=sys.stderr)
-        return 1
 
-    if not args.quiet:
-        print(summary)
-        print()
-    print(f"wrote {len(written)} files in {out}/: " + ", ".join(p.name for p in written))
+    written = write_outputs(out, write, summary)
+    report_written(out, written, summary, args.quiet)
     return 0

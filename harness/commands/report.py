@@ -75,9 +75,21 @@ def run(args: argparse.Namespace) -> int:
             print(f"djl-fmu report: no claim {unknown}; available: {sorted(numbers)}",
                   file=sys.stderr)
             return 2
-    if args.fmu is not None and not args.fmu.is_file():
-        print(f"djl-fmu report: --fmu {args.fmu}: no such file", file=sys.stderr)
-        return 2
+    if args.fmu is not None:
+        from ..planner import check_fmu_variables
+
+        if not args.fmu.is_file():
+            print(f"djl-fmu report: --fmu {args.fmu}: no such file", file=sys.stderr)
+            return 2
+        try:
+            missing = check_fmu_variables(args.fmu)
+        except ValueError as e:
+            print(f"djl-fmu report: --fmu {e}", file=sys.stderr)
+            return 2
+        if missing:
+            print(f"djl-fmu report: --fmu {args.fmu}: the FMU lacks the generator variables "
+                  + ", ".join(missing), file=sys.stderr)
+            return 2
     command = " ".join(
         ["djl-fmu report", "-o", str(args.output)]
         + (["--fast"] if args.fast else [])

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import re
 import sys
 from pathlib import Path
 
@@ -75,13 +74,20 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _safe(name: str) -> str:
-    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_") or "scenario"
-
-
 def run(args: argparse.Namespace) -> int:
     """Check every scenario, run them, then write the outputs; return the exit status."""
-    from ..scenario import DEFAULT_SCENARIOS, ScenarioError, embedded_scenarios, load_scenario
+    from ._common import CommandError
+
+    try:
+        return _run(args)
+    except CommandError as e:
+        print(f"djl-fmu simulate: {e}", file=sys.stderr)
+        return e.status
+
+
+def _run(args: argparse.Namespace) -> int:
+    from ..scenario import DEFAULT_SCENARIOS, embedded_scenarios
+    from ._common import CommandError, load_scenarios, report_written, write_outputs
 
     if args.list:
         for name, desc in embedded_scenarios().items():
@@ -89,23 +95,8 @@ def run(args: argparse.Namespace) -> int:
         return 0
 
     # 1. check everything before simulating anything
-    names = args.scenarios or list(DEFAULT_SCENARIOS)
-    try:
-        scenarios = [load_scenario(n) for n in names]
-        if args.fmu is not None or args.fmi_version is not None:
-            scenarios = [s.with_fmu(args.fmu, args.fmi_version) for s in scenarios]
-    except ScenarioError as e:
-        print(f"djl-fmu simulate: {e}", file=sys.stderr)
-        return 2
-    stems = [_safe(s.name) for s in scenarios]
-    if len(set(stems)) != len(stems):
-        print("djl-fmu simulate: two scenarios have the same name: "
-              + ", ".join(s.name for s in scenarios), file=sys.stderr)
-        return 2
-    if args.out.exists() and not args.out.is_dir():
-        print(f"djl-fmu simulate: --out {args.out} exists and is not a directory",
-              file=sys.stderr)
-        return 2
+    scenarios, stems = load_scenarios(args.scenarios or list(DEFAULT_SCENARIOS), args.fmu,
+                                      args.fmi_version, args.out)
 
     # 2. simulate (nothing is written yet)
     import matplotlib
@@ -120,55 +111,40 @@ def run(args: argparse.Namespace) -> int:
         for sc in scenarios:
             results.append(run_scenario(sc, progress=not args.quiet))
     except (FMUError, ValueError, OSError) as e:
-        print(f"djl-fmu simulate: simulation failed ({sc.name}): {e}", file=sys.stderr)
-        return 1
+        raise CommandError(1, f"simulation failed ({sc.name}): {e}") from None
 
-    texts = []
-    for r in results:
-        if not isinstance(r, SweepResult):
-            texts.append(r.table())
+    texts = [r.table() for r in results if not isinstance(r, SweepResult)]
     sweeps = [r for r in results if isinstance(r, SweepResult)]
     if sweeps:
         texts.append(format_table2(sweeps))
     summary = "\n\n".join(texts)
 
-    # 3. write everything
-    out: Path = args.out
-    written: list[Path] = []
-    try:
-        out.mkdir(parents=True, exist_ok=True)
+    # 3. write everything, or nothing
+    def write(written: list[Path]) -> None:
         for stem, r in zip(stems, results, strict=True):
-            written.append(r.to_csv(out / f"{stem}.csv"))
+            written.append(r.to_csv(args.out / f"{stem}.csv"))
             if not args.no_plot:
-                written.append(save_figure(r.plot(), out / f"{stem}.png"))
+                written.append(save_figure(r.plot(), args.out / f"{stem}.png"))
         if sweeps:
-            written.append(write_csv(out / "table2.csv", table2_rows(sweeps)))
+            written.append(write_csv(args.out / "table2.csv", table2_rows(sweeps)))
         if not args.scenarios and not args.no_fmus:
-            from fmpy.validation import validate_fmu
+            _write_fmus(args.out, written)
 
-            from ..fmu.build import build_fmu
-
-            for v in (2, 3):
-                fmu_path = build_fmu(v, out / f"JerkLimitedTrajectory-fmi{v}.fmu")
-                written.append(fmu_path)
-                problems = validate_fmu(str(fmu_path))
-                if problems:
-                    print(f"djl-fmu simulate: {fmu_path} does not validate: "
-                          + "; ".join(problems), file=sys.stderr)
-                    return 1
-        summary_path = out / "summary.txt"
-        tmp = out / ".summary.txt.tmp"
-        tmp.write_text(summary + "\n", encoding="utf-8")
-        tmp.replace(summary_path)
-        written.append(summary_path)
-    except (OSError, RuntimeError) as e:
-        for pth in written:
-            pth.unlink(missing_ok=True)
-        print(f"djl-fmu simulate: cannot write the outputs in {out}: {e}", file=sys.stderr)
-        return 1
-
-    if not args.quiet:
-        print(summary)
-        print()
-    print(f"wrote {len(written)} files in {out}/: " + ", ".join(p.name for p in written))
+    written = write_outputs(args.out, write, summary)
+    report_written(args.out, written, summary, args.quiet)
     return 0
+
+
+def _write_fmus(out: Path, written: list[Path]) -> None:
+    """Write the two FMUs (built from this package, validated) for the default run."""
+    from fmpy.validation import validate_fmu
+
+    from ..fmu.build import build_fmu
+    from ._common import CommandError
+
+    for v in (2, 3):
+        path = build_fmu(v, out / f"JerkLimitedTrajectory-fmi{v}.fmu")
+        written.append(path)
+        problems = validate_fmu(str(path))
+        if problems:
+            raise CommandError(1, f"{path} does not validate: " + "; ".join(problems))

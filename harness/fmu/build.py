@@ -123,11 +123,14 @@ def build_fmu(fmi_version: int, out_path: str | os.PathLike, *, cc: str = "gcc",
         compile_binary(fmi_version, lib, cc=cc, extra_cflags=extra_cflags)
         (root / "documentation" / "index.html").write_text(_documentation(fmi_version))
         tmp_zip = out_path.with_name(out_path.name + f".tmp{os.getpid()}")
-        with zipfile.ZipFile(tmp_zip, "w", zipfile.ZIP_DEFLATED) as z:
-            for p in sorted(root.rglob("*")):
-                if p.is_file():
-                    z.write(p, p.relative_to(root).as_posix())
-        os.replace(tmp_zip, out_path)
+        try:
+            with zipfile.ZipFile(tmp_zip, "w", zipfile.ZIP_DEFLATED) as z:
+                for p in sorted(root.rglob("*")):
+                    if p.is_file():
+                        z.write(p, p.relative_to(root).as_posix())
+            os.replace(tmp_zip, out_path)
+        finally:
+            tmp_zip.unlink(missing_ok=True)
     return out_path
 
 

@@ -131,7 +131,7 @@ class GeneratorFMU:
         self.instance_name = instance_name
         self._initialized = False
         self.start_time = float(start_time)
-        self._setup(start_time)
+        self._setup()
         if params:
             self.set(params)
 
@@ -182,10 +182,9 @@ class GeneratorFMU:
             self._log_message = log_message
             self.fmu.instantiate(loggingOn=debug_logging, logMessage=log_message)
 
-    def _setup(self, start_time: float) -> None:
-        self._start = start_time
+    def _setup(self) -> None:
         if self.fmi_version == 2:
-            self._call(self.fmu.setupExperiment, startTime=start_time)
+            self._call(self.fmu.setupExperiment, startTime=self.start_time)
 
     def _call(self, fn: Any, *args: Any, **kwargs: Any) -> Any:
         """Call an fmpy method; turn an FMI error into :class:`FMUError` with the log."""
@@ -285,7 +284,7 @@ class GeneratorFMU:
         if self.fmi_version == 2:
             self._call(self.fmu.enterInitializationMode)
         else:
-            self._call(self.fmu.enterInitializationMode, startTime=self._start)
+            self._call(self.fmu.enterInitializationMode, startTime=self.start_time)
         self._initialized = True
         self._call(self.fmu.exitInitializationMode)
 
@@ -304,25 +303,73 @@ class GeneratorFMU:
             New FMU start time (default: keep the current one).
         """
         if start_time is not None:
-            self._start = float(start_time)
+            self.start_time = float(start_time)
         self._call(self.fmu.reset)
         self._initialized = False
-        self.start_time = self._start
-        self.time = self._start
-        if self.fmi_version == 2:
-            self._call(self.fmu.setupExperiment, startTime=self._start)
+        self.time = self.start_time
+        self._setup()
         if params:
             self.set(params)
         self.initialize()
 
     def motion_start(self) -> float:
         """Time of the generator sample at which the motion starts (see :func:`motion_start`)."""
-        return motion_start(float(self.get("t_start")), self._start, float(self.get("Te")))
+        return motion_start(float(self.get("t_start")), self.start_time, float(self.get("Te")))
 
     def do_step(self, h: float) -> None:
         """Advance the FMU by ``h`` seconds (a whole multiple of ``Te``)."""
         self._call(self.fmu.doStep, currentCommunicationPoint=self.time, communicationStepSize=h)
         self.time += h
+
+    def record(self, n: int, h: float, reals: Sequence[str],
+               flags: Sequence[str] = ()) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """Read the outputs now, then after each of ``n`` steps of ``h``.
+
+        Parameters
+        ----------
+        n : int
+            Number of communication steps.
+        h : float
+            Communication step (a whole multiple of ``Te``).
+        reals : sequence of str
+            Real outputs to record.
+        flags : sequence of str
+            Boolean or Integer outputs to record (``done``, ``segment``).
+
+        Returns
+        -------
+        t : ndarray
+            The n + 1 communication points.
+        values : dict of ndarray
+            One array of n + 1 values per name.
+        """
+        vrs = self.vr(reals)
+        getters = []
+        for name in flags:
+            var = self.variable(name)
+            get = self.fmu.getBoolean if var.type == "Boolean" else (
+                self.fmu.getInt32 if self.fmi_version == 3 else self.fmu.getInteger)
+            getters.append((name, get, [var.valueReference]))
+        rows = np.empty((n + 1, len(vrs)))
+        other = {name: np.empty(n + 1, dtype=np.int64) for name in flags}
+        t = self.time + h * np.arange(n + 1)
+        step, get_reals = self.fmu.doStep, self.get_reals
+        from fmpy.fmi1 import FMICallException
+
+        try:
+            for k in range(n + 1):
+                if k:
+                    step(currentCommunicationPoint=t[k - 1], communicationStepSize=h)
+                rows[k] = get_reals(vrs)
+                for name, get, vr in getters:
+                    other[name][k] = get(vr)[0]
+        except FMICallException as e:
+            raise FMUError(str(getattr(e, "function", "doStep")), int(e.status),
+                           self.log) from None
+        self.time = float(t[-1])
+        values = {name: rows[:, i] for i, name in enumerate(reals)}
+        values.update(other)
+        return t, values
 
     def get_state(self) -> Any:
         """Opaque FMU state (free it with :meth:`free_state`)."""
@@ -439,8 +486,10 @@ class Trajectory:
 
     @property
     def t_end(self) -> float:
-        """Time at which the motion ends (s)."""
-        return float(self.params.get("t_start", 0.0)) + self.motion_time
+        """Time at which the motion ends (s): its first generator sample plus the motion time."""
+        start = max(motion_start(float(self.params["t_start"]), float(self.t[0]),
+                                 float(self.params["Te"])), float(self.t[0]))
+        return start + self.motion_time
 
     def plot(self, *, al: bool = True, title: str | None = None):
         """Plot x, v, a and j against time (the AL profile dashed); return the figure."""
@@ -513,27 +562,11 @@ def generate(
             n = math.ceil((t_end - start_time) / step - 1e-9) + 10
         else:
             n = int(round((t_stop - start_time) / step))
-        vrs = g.vr(REAL_OUTPUTS)
-        vr_done = g.variable("done").valueReference
-        vr_seg = g.variable("segment").valueReference
-        get_bool = g.fmu.getBoolean
-        get_int = g.fmu.getInt32 if g.fmi_version == 3 else g.fmu.getInteger
-        rows = np.empty((n + 1, len(REAL_OUTPUTS)))
-        done = np.empty(n + 1, dtype=bool)
-        seg = np.empty(n + 1, dtype=np.int32)
-        t = start_time + step * np.arange(n + 1)
-        for k in range(n + 1):
-            if k:
-                g._call(g.fmu.doStep, currentCommunicationPoint=t[k - 1],
-                        communicationStepSize=step)
-            rows[k] = g.get_reals(vrs)
-            done[k] = get_bool([vr_done])[0]
-            seg[k] = get_int([vr_seg])[0]
-        g.time = float(t[-1])
+        t, values = g.record(n, step, REAL_OUTPUTS, ("done", "segment"))
         full = {v.name: g.get(v.name) for v in spec.PARAMETERS}
         N_F = tuple(int(g.get(f"N_F{i}")) for i in range(1, 5))
         log = list(g.log)
-    cols = {name: rows[:, i] for i, name in enumerate(REAL_OUTPUTS)}
-    return Trajectory(t=t, done=done, segment=seg, params=full, motion_time=motion_time,
-                      N_F=N_F, fmi_version=fmi_version if fmu is None else g.fmi_version,
-                      log=log, **cols)
+    done = values.pop("done").astype(bool)
+    segment = values.pop("segment").astype(np.int32)
+    return Trajectory(t=t, done=done, segment=segment, params=full, motion_time=motion_time,
+                      N_F=N_F, fmi_version=g.fmi_version, log=log, **values)

@@ -7,21 +7,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "check.h"
 #include "djl_vars.h"
 #include "fmi3Functions.h"
 
-static int failures = 0;
 static char last_message[2048];
-
-#define CHECK(cond, ...)                                                                         \
-    do {                                                                                         \
-        if (!(cond)) {                                                                           \
-            fprintf(stderr, "line %d: ", __LINE__);                                              \
-            fprintf(stderr, __VA_ARGS__);                                                        \
-            fputc('\n', stderr);                                                                 \
-            failures++;                                                                          \
-        }                                                                                        \
-    } while (0)
 
 static void log_message(fmi3InstanceEnvironment env, fmi3Status status, fmi3String category,
                         fmi3String message)

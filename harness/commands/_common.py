@@ -1,0 +1,90 @@
+"""What the scenario commands (``simulate``, ``compare``) share.
+
+Both check every input before running anything and write their outputs only
+once every run has succeeded, all or nothing.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+
+class CommandError(Exception):
+    """A command stops: ``status`` is its exit status, the message says why."""
+
+    def __init__(self, status: int, message: str) -> None:
+        super().__init__(message)
+        self.status = status
+
+
+def safe_stem(name: str) -> str:
+    """File-name stem for a scenario name."""
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_") or "scenario"
+
+
+def load_scenarios(names: Sequence[str], fmu: Path | None, fmi_version: int | None,
+                   out: Path) -> tuple[list[Any], list[str]]:
+    """Load and check the scenarios and the output folder; return them and their stems.
+
+    Raises
+    ------
+    CommandError
+        With status 2, on a bad scenario, two scenarios of the same name, or an
+        output path that is not a folder.
+    """
+    from ..scenario import ScenarioError, load_scenario
+
+    try:
+        scenarios = [load_scenario(n) for n in names]
+        if fmu is not None or fmi_version is not None:
+            scenarios = [s.with_fmu(fmu, fmi_version) for s in scenarios]
+    except ScenarioError as e:
+        raise CommandError(2, str(e)) from None
+    check_stems(scenarios)
+    if out.exists() and not out.is_dir():
+        raise CommandError(2, f"--out {out} exists and is not a directory")
+    return scenarios, [safe_stem(s.name) for s in scenarios]
+
+
+def check_stems(scenarios: Sequence[Any]) -> None:
+    """Refuse two scenarios whose outputs would have the same file names."""
+    stems = [safe_stem(s.name) for s in scenarios]
+    if len(set(stems)) != len(stems):
+        raise CommandError(2, "two scenarios have the same name: "
+                           + ", ".join(s.name for s in scenarios))
+
+
+def write_outputs(out: Path, write: Callable[[list[Path]], None], summary: str) -> list[Path]:
+    """Create ``out``, let ``write`` add its files to the list, then write ``summary.txt``.
+
+    If anything fails, the files already written are removed and
+    :class:`CommandError` (status 1) is raised: nothing is left half-written.
+    """
+    written: list[Path] = []
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        write(written)
+        tmp = out / ".summary.txt.tmp"
+        tmp.write_text(summary + "\n", encoding="utf-8")
+        tmp.replace(out / "summary.txt")
+        written.append(out / "summary.txt")
+    except CommandError:
+        for p in written:
+            p.unlink(missing_ok=True)
+        raise
+    except (OSError, RuntimeError) as e:
+        for p in written:
+            p.unlink(missing_ok=True)
+        raise CommandError(1, f"cannot write the outputs in {out}: {e}") from None
+    return written
+
+
+def report_written(out: Path, written: Sequence[Path], summary: str, quiet: bool) -> None:
+    """Print the tables (unless quiet) and the list of files written."""
+    if not quiet:
+        print(summary)
+        print()
+    print(f"wrote {len(written)} files in {out}/: " + ", ".join(p.name for p in written))
