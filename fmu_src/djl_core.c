@@ -719,6 +719,7 @@ typedef struct {
     step_t step[DJL_MAX_STEPS];
     int n_steps;
     int64_t bnd[DJL_MAX_PIECES + 8];
+    int lead;       /* DJL: a segment's first stage waits for the previous ramps (sctx.g) */
 } work_t;
 
 static djl_status infeasible(djl_error *err, const djl_params *p, int i, const sctx *c,
@@ -795,7 +796,7 @@ static int absorb_into(work_t *w, int j, int L, double r_real, int branch, int64
     if (!segment_absorb(w, j, r_real, branch)) return 0;
     t1 = tail_into(w, L);
     if (imax2(t0, bend_own) != imax2(t1, bend_own)) ok = 0;
-    for (i = j + 1; i <= L && ok; i++)
+    for (i = j + 1; i <= L && ok && w->lead; i++)
         if (!w->empty[i] && (double)tail_into(w, i) > w->c[i].g) ok = 0;
     if (ok) return 1;
     w->c[j] = c0;
@@ -917,6 +918,7 @@ djl_status djl_plan_motion(const djl_params *p, djl_plan *plan, djl_error *err)
 
     n = p->n_segments == 0 ? 1 : p->n_segments;
     plan->n_segments = n;
+    w.lead = !(N[0] == N[1] && N[1] == N[2] && N[2] == N[3]);
     scale = fabs(p->v0) * p->Te;
     for (i = 0; i < n; i++) {
         w.Dreal[i] = p->n_segments == 0 ? p->distance : p->seg_distance[i];
@@ -955,8 +957,7 @@ djl_status djl_plan_motion(const djl_params *p, djl_plan *plan, djl_error *err)
          * v_max); JL ramps may, the output then being a moving average of
          * the AL profile. */
         c->g = 0.0;
-        if (i > 0 && !(N[0] == N[1] && N[1] == N[2] && N[2] == N[3]))
-            c->g = (double)tail_into(&w, i);
+        if (i > 0 && w.lead) c->g = (double)tail_into(&w, i);
         r = 0.0;
         if (Dr == 0.0 && w.vS[i] == 0.0 && w.vE[i] == 0.0) {
             w.empty[i] = 1;

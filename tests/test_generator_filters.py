@@ -152,3 +152,23 @@ def test_jl_jerk_is_a_over_T_F_and_never_exceeds_it_in_paper_mode(fmu2):
     assert np.abs(tr.j).max() == pytest.approx(a_level / 0.1, rel=1e-12)
     # the peak acceleration is below the AL level: the ramps overlapped
     assert np.abs(tr.a).max() < a_level * 0.99
+
+
+def test_djl_segments_do_not_overlap_ramps_of_different_lengths(fmu2):
+    """Multi-segment DJL: a segment starts its first stage only once the ramps of the
+    previous one are over.  Otherwise segment 1's long deceleration ramp (100 samples)
+    would still be running while segment 2's short acceleration ramps (5 and 30
+    samples) complete, and their different lags add up above v_max."""
+    p = {"profile": 3, "v_max": 1.0, "a_max": 10.0, "d_max": 10.0,
+         "T_F1": 0.005, "T_F2": 0.03, "T_F3": 0.1, "T_F4": 0.1,
+         "n_segments": 2, "seg_distance": [0.3, 0.6], "seg_v_end": [0.2, 1.0]}
+    tr = generate(p, fmu=fmu2)
+    check_end_and_limits(tr)          # |v| <= v_max among the rest
+    runs = jerk_runs(tr.j)
+    # segment 1: +a/T_F1, -a/T_F2, -d/T_F3, +d/T_F4; segment 2 starts with +a'/T_F1
+    lengths = [r.length for r in runs]
+    assert lengths[:4] == [5, 30, 100, 100], lengths
+    end_seg1 = runs[3].start + runs[3].length
+    assert runs[4].start >= end_seg1, (runs[4].start, end_seg1)
+    # and the velocity really was at the boundary value in between
+    assert tr.v[end_seg1] == pytest.approx(0.2, rel=1e-12)
