@@ -12,8 +12,9 @@ import re
 
 import pytest
 
-from _motion_checks import check_end_and_limits
 from harness.fmu.runner import generate
+
+from _motion_checks import check_end_and_limits
 
 
 def _rules(tr) -> list[int]:

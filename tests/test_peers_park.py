@@ -93,6 +93,17 @@ def test_paper_moves_against_ruckig(case, P):
     np.testing.assert_allclose(ap, ar, atol=1e-9 * A)
 
 
+# the case boundaries for the paper's limits: V reached from P = V (V/A + A/J) = 15600 deg,
+# A reached from P = 2 A^3 / J^2 = 2160 deg (random moves rarely fall this close)
+@pytest.mark.parametrize("case,P", [("II", 15500.0), ("I", 15700.0),
+                                    ("III", 2100.0), ("II", 2200.0)])
+def test_moves_either_side_of_the_case_boundaries(case, P):
+    p = park_profile(P, V, A, J)
+    assert p.case == case
+    assert p.total_time == pytest.approx(time_optimal(P, V, A, J).duration, rel=1e-9)
+    assert p.motion().x[-1] == pytest.approx(P, rel=1e-12)
+
+
 limits = st.tuples(st.floats(0.01, 10.0), st.floats(0.1, 50.0), st.floats(1.0, 2000.0))
 
 
