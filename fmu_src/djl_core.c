@@ -365,7 +365,10 @@ static int64_t ceil_len(double x)
 }
 
 /* Round the continuous solution (vp, kx) to whole samples and keep the best
- * exact neighbour. */
+ * exact neighbour.  Rounding a length up usually lowers v_p, but not always:
+ * with overlapping ramps of different lengths (short_stage = 2) a longer
+ * stage can move its centroid earlier and push v_p above v_max, so the
+ * neighbours one sample either side are all tried. */
 static int round_ad(const sctx *c, double vp, double kx, int signfree, ssol *best)
 {
     double ea = need_eff(c, vp - c->vs, La(c));
@@ -375,11 +378,11 @@ static int round_ad(const sctx *c, double vp, double kx, int signfree, ssol *bes
     int64_t kc = imax2(ceil_len((double)kmin(c) + kx), kmin(c));
     int i, j, l;
     best->ok = 0;
-    for (i = 0; i < 2; i++)
-        for (j = 0; j < 2; j++)
-            for (l = 0; l < 2; l++) {
+    for (i = -1; i <= 1; i++)
+        for (j = -1; j <= 1; j++)
+            for (l = -1; l <= 1; l++) {
                 ssol s;
-                if (try_ad(c, n1c - i, kc - j, mc - l, signfree, &s) && better(&s, best)) *best = s;
+                if (try_ad(c, n1c + i, kc + j, mc + l, signfree, &s) && better(&s, best)) *best = s;
             }
     return best->ok;
 }
@@ -440,6 +443,42 @@ static int solve_b1(const sctx *c0, ssol *out)
     return 1;
 }
 
+/* Whole-sample lengths for a peak velocity near vt: stages sized for vt,
+ * the cruise rounded up for the distance; rounding moves the peak, so the
+ * stages are resized for it (the total kept) until the limits hold. */
+static int fit_ad(const sctx *c, double vt, ssol *out)
+{
+    int64_t n1 = 0, m = 0, k;
+    double K0, K1, be, kr, v = vt;
+    int it;
+    if (!(vt > 0.0)) return 0;
+    for (it = 0; it < 8; it++) {
+        int64_t n1v = imax2(ceil_len(need_eff(c, v - c->vs, La(c)) - 0.5 * (c->N2 - c->N1)),
+                            nmin_a(c));
+        int64_t mv = imax2(ceil_len(need_eff(c, c->ve - v, Ld(c)) - 0.5 * (c->N4 - c->N3)),
+                           nmin_d(c));
+        if (it == 0) {
+            n1 = n1v;
+            m = mv;
+            ad_coeffs(c, (double)n1, (double)kmin(c), (double)m, &K0, &K1, &be);
+            kr = (double)kmin(c) + (c->D / c->Te - K0 - vt * K1) / vt;
+            if (!(kr > (double)kmin(c) - 1.0) || !(kr < (double)DJL_MAX_MOTION_SAMPLES)) return 0;
+            k = imax2(ceil_len(kr), kmin(c));
+        } else {
+            if (n1v <= n1 && mv <= m) return 0;
+            k -= imax2(n1v - n1, 0) + imax2(mv - m, 0);
+            n1 = imax2(n1, n1v);
+            m = imax2(m, mv);
+        }
+        if (try_ad(c, n1, k, m, 1, out)) return 1;
+        if (k < kmin(c)) return 0;
+        ad_coeffs(c, (double)n1, (double)k, (double)m, &K0, &K1, &be);
+        v = (c->D / c->Te - K0) / K1;
+        if (!isfinite(v)) return 0;
+    }
+    return 0;
+}
+
 /* Branches 2 (v_p between the end velocities: two stages in the same
  * direction) and 3 (v_p below both: a dip), used to land exactly when the
  * time-optimal shape cannot. */
@@ -485,7 +524,18 @@ static int solve_b23_once(const sctx *c, int branch, ssol *out)
             return 1;
         }
     }
-    return 0;
+    /* Or size the stages for a peak velocity vt of a grid spanning the
+     * branch (a deep dip needs both stages long, not in the ratio of the
+     * shallow one), the cruise for the distance at vt. */
+    out->ok = 0;
+    for (p = 0; p < 120; p++) {
+        double u = exp2(-(double)(p / 2) / 3.0); /* 1 .. 2^-20, from both ends */
+        double vt = p % 2 ? lo + (hi - lo) * u : hi - (hi - lo) * u;
+        ssol s;
+        if (fit_ad(c, vt, &s) && better(&s, out)) *out = s;
+    }
+    if (out->ok) out->branch = branch;
+    return out->ok;
 }
 
 /* Try first with ramps 2 and 3 kept apart, then letting them merge (kmin). */
@@ -722,13 +772,16 @@ typedef struct {
     int lead;       /* DJL: a segment's first stage waits for the previous ramps (sctx.g) */
 } work_t;
 
+/* Error for segment i, planned in the frame of its direction with the
+ * distance c->D (the user's distance plus what the rounding of the earlier
+ * segments passed on); dmin is the shortest distance that frame allows. */
 static djl_status infeasible(djl_error *err, const djl_params *p, int i, const sctx *c,
                              double dmin)
 {
-    char dname[40];
+    char dname[40], left[120] = "";
     double D = p->n_segments == 0 ? p->distance : p->seg_distance[i];
-    double vs = p->n_segments == 0 || i == 0 ? p->v0 : p->seg_v_end[i - 1];
-    double ve = p->n_segments == 0 ? p->v_e : p->seg_v_end[i];
+    double vs = (p->n_segments == 0 || i == 0 ? p->v0 : p->seg_v_end[i - 1]) + 0.0; /* no -0 */
+    double ve = (p->n_segments == 0 ? p->v_e : p->seg_v_end[i]) + 0.0;
     if (p->n_segments == 0)
         snprintf(dname, sizeof dname, "distance");
     else
@@ -739,17 +792,28 @@ static djl_status infeasible(djl_error *err, const djl_params *p, int i, const s
         c2.merge23 = 1;
         dmin = D_cont(&c2, c->vs, 0.0);
     }
-    if (c->last && c->ve != 0.0 && fabs(D) >= dmin)
+    if (c->D >= dmin && (c->ve == 0.0 || !c->last))
+        /* theory says a profile exists (docs/generator.md): a planner limitation */
+        return set_error(err, DJL_E_INTERNAL, dname, D,
+                         "%s = %g m from %g m/s to %g m/s (v_max = %g m/s, a_max = %g m/s2, "
+                         "d_max = %g m/s2, Te = %g s): the planner found no profile landing "
+                         "exactly on a sample although one should exist; please report it",
+                         dname, D, vs, ve, c->vm, c->am, c->dm, c->Te);
+    if (c->last && c->ve != 0.0 && c->D >= dmin)
         return set_error(err, DJL_E_INFEASIBLE, dname, D,
                          "%s = %g m cannot end exactly on a sample at the non-zero end speed %g "
                          "m/s (from %g m/s, v_max = %g m/s, a_max = %g m/s2, d_max = %g m/s2, "
                          "Te = %g s and the jerk times): just above the minimum of about %g m only "
                          "some distances can; use a somewhat longer distance, or end at rest",
                          dname, D, ve, vs, c->vm, c->am, c->dm, c->Te, dmin);
+    if (fabs(c->D - fabs(D)) > 1e-12 * (fabs(D) + fabs(dmin)))
+        snprintf(left, sizeof left, "; rounding the earlier segments to whole samples left it %g m",
+                 c->D);
     return set_error(err, DJL_E_INFEASIBLE, dname, D,
                      "%s = %g m is too short to go from %g m/s to %g m/s within v_max = %g m/s, "
                      "a_max = %g m/s2, d_max = %g m/s2 and the jerk times at Te = %g s: it needs "
-                     "about %g m or more", dname, D, vs, ve, c->vm, c->am, c->dm, c->Te, dmin);
+                     "more than about %g m%s", dname, D, vs, ve, c->vm, c->am, c->dm, c->Te,
+                     dmax2(dmin, 0.0), left);
 }
 
 static int segment_absorb(work_t *w, int j, double r_real, int branch)
@@ -965,7 +1029,6 @@ djl_status djl_plan_motion(const djl_params *p, djl_plan *plan, djl_error *err)
             s->ok = 1;
             continue;
         }
-        if (c->D < 0.0) return infeasible(err, p, i, c, 0.0);
         if (solve_b1(c, s)) continue;
         if (!c->last) {
             if (solve_pinned(c, s, &resid, &dmin)) {

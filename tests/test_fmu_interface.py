@@ -76,6 +76,11 @@ BAD_PARAMETERS = [
     ({"n_segments": 3, "seg_distance": [0.9, 0.01, 0.5], "seg_v_end": [1.0, 0.0, 0.0],
       "a_max": 1.0, "d_max": 1.0},
      ["seg_distance[2] = 0.01", "too short"]),
+    # the cruise before it is rounded to 301 samples: 0.4 mm less is left for the braking
+    ({"profile": 1, "v0": 1.0, "a_max": 10.0, "d_max": 10.0, "n_segments": 3,
+      "seg_distance": [0.3006, 0.0497, 0.1], "seg_v_end": [1.0, 0.0, 0.0]},
+     ["seg_distance[2] = 0.0497", "too short",
+      "rounding the earlier segments to whole samples left it 0.0493 m"]),
     ({"n_segments": 2, "seg_distance": [0.2, math.nan], "seg_v_end": [0.0, 0.0]},
      ["seg_distance[2] = nan"]),
     ({"n_segments": 2, "seg_distance": [0.2, -0.2], "seg_v_end": [0.3, 0.0]},

@@ -35,6 +35,21 @@ CASES = {
     # a pure cruise at v_max that must end on a sample: a small dip
     "dip_cruise": ({"profile": 2, "T_F1": 0.02, "v0": 1.0, "v_e": 1.0, "v_max": 1.0,
                     "distance": 0.3004}, [3]),
+    # a deep dip in a short cruise at v_max: both stages must be long, not in the
+    # ratio of a shallow dip (found by the randomised C driver)
+    "deep_dip": ({"profile": 1, "short_stage": 2, "Te": 0.00050721364729174772,
+                  "v_max": 1.0612844137444586, "a_max": 1.3736753335438505,
+                  "d_max": 19.265050856450127, "v0": 1.0612844137444586,
+                  "v_e": 1.0612844137444586, "distance": 0.014959341019168465}, [3]),
+    # DJL from rest, shorter than the single stage the stretch rule allows with
+    # T_F1: part of the speed is gained with the short filters of stage 3-4
+    "two_stages_short_filters": ({"profile": 3, "short_stage": 1,
+                                  "Te": 0.0011577903769144876, "v_max": 0.79340460080704966,
+                                  "a_max": 0.46922031987791163, "d_max": 0.46922031987791163,
+                                  "T_F1": 0.12595696885246935, "T_F2": 0.078901093003086537,
+                                  "T_F3": 0.016124389591479094, "T_F4": 0.0054857091075028721,
+                                  "v_e": 0.32640579576148687,
+                                  "distance": 0.11863043508208879}, [2]),
     # last segment pinned at v_max: rounded, the rest-to-rest segment before it
     # moves its peak velocity to take up the residual
     "absorbed_by_peak": ({"profile": 2, "T_F1": 0.02, "v_max": 1.0, "n_segments": 2,

@@ -114,6 +114,42 @@ def test_random_single_moves(fmus, p, version):
         check_four_stages(tr, N)
 
 
+def test_rest_to_rest_overlap_rule_rounding_both_ways(fmu2):
+    """Rounding a stage up can raise v_p (found by the C driver).
+
+    With the overlap rule and ramps of different lengths, a longer stage can move
+    its centroid earlier; only a neighbour one sample shorter lands within v_max.
+    """
+    p = {"profile": 3, "short_stage": 2, "Te": 0.00044243022946514974,
+         "v_max": 0.15213139506695939, "a_max": 15.756313269062165,
+         "d_max": 15.756313269062165, "T_F1": 0.049116465323235783,
+         "T_F2": 0.0055096426058195347, "T_F3": 0.11897756955840137,
+         "T_F4": 0.13252136157149821, "distance": 1.5572269915612207}
+    check_end_and_limits(generate(p, fmu=fmu2))
+
+
+def test_segment_left_negative_by_the_residual_before_it(fmu2):
+    """A JL segment whose ramps lag behind it can cover a negative distance.
+
+    The cruise before segment 4 is rounded and passes on more than its 1.48 mm;
+    what is left is negative but above the segment's minimum (found by the C
+    driver, once refused as too short).
+    """
+    segs = [(0.031938784823629406, 0.51475725598257971), (0.14192468565378169, 0.0),
+            (0.0048527213955989433, 0.36788765963060976),
+            (0.0014807239097278655, 0.41521361172807442),
+            (0.53621383222325936, 0.12452356066520361),
+            (0.038102150341780515, 0.51475725598257971),
+            (0.28064510762336292, 0.46774256931368985),
+            (0.41737515519342983, 0.48400765961165548), (0.2, 0.0)]
+    p = {"profile": 2, "short_stage": 2, "Te": 0.0099993416133242474,
+         "v_max": 0.51475725598257971, "a_max": 17.572367074186001,
+         "d_max": 17.572367074186001, "T_F1": 0.17950792033633217,
+         "n_segments": len(segs), "seg_distance": [d for d, _ in segs],
+         "seg_v_end": [v for _, v in segs]}
+    check_end_and_limits(generate(p, fmu=fmu2))
+
+
 @st.composite
 def multi_moves(draw):
     """16 to 32 segments, one direction, boundary speeds anywhere up to v_max."""

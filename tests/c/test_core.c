@@ -169,6 +169,22 @@ int main(int argc, char **argv)
             refused++;
             if (expect) FAIL("case %ld: invalid %s reported as infeasible: %s", i, expect,
                              e.message);
+            /* always feasible: a single move from rest to rest, and a single move long
+             * enough to reach v_max and come back, with room for the jerk times and, at
+             * a non-zero end speed, for a speed dip worth one sample of travel at v_max
+             * (area a*T^2/4 in a time T) */
+            if (p.n_segments == 0 && p.v0 == 0.0 && p.v_e == 0.0)
+                FAIL("case %ld: rest-to-rest move refused: %s", i, e.message);
+            if (p.n_segments == 0) {
+                double vm = p.v_max, room = 4.0 * p.Te, dip = 0.0;
+                int k;
+                for (k = 0; k < 4; k++) room += p.T_F[k];
+                if (p.v_e != 0.0) dip = 2.0 * vm * sqrt(vm * p.Te / fmin(p.a_max, p.d_max));
+                if (fabs(p.distance) >= 2.0 * ((vm * vm - p.v0 * p.v0) / (2.0 * p.a_max) +
+                                               (vm * vm - p.v_e * p.v_e) / (2.0 * p.d_max)) +
+                                            2.0 * vm * room + 2.0 * dip)
+                    FAIL("case %ld: long single move refused: %s", i, e.message);
+            }
             if (!strstr(e.message, e.param)) FAIL("case %ld: %s", i, e.message);
         } else {
             FAIL("case %ld: %s: %s", i, djl_status_name(st), e.message);
