@@ -367,8 +367,8 @@ static int64_t ceil_len(double x)
 /* Round the continuous solution (vp, kx) to whole samples and keep the best
  * exact neighbour.  Rounding a length up usually lowers v_p, but not always:
  * with overlapping ramps of different lengths (short_stage = 2) a longer
- * stage can move its centroid earlier and push v_p above v_max, so the
- * neighbours one sample either side are all tried. */
+ * stage can move its centroid earlier and push v_p above v_max, so if no
+ * neighbour one sample shorter lands, those one sample longer are tried. */
 static int round_ad(const sctx *c, double vp, double kx, int signfree, ssol *best)
 {
     double ea = need_eff(c, vp - c->vs, La(c));
@@ -376,14 +376,16 @@ static int round_ad(const sctx *c, double vp, double kx, int signfree, ssol *bes
     int64_t n1c = imax2(ceil_len(ea - 0.5 * (c->N2 - c->N1)), nmin_a(c));
     int64_t mc = imax2(ceil_len(ed - 0.5 * (c->N4 - c->N3)), nmin_d(c));
     int64_t kc = imax2(ceil_len((double)kmin(c) + kx), kmin(c));
-    int i, j, l;
+    int i, j, l, up;
     best->ok = 0;
-    for (i = -1; i <= 1; i++)
-        for (j = -1; j <= 1; j++)
-            for (l = -1; l <= 1; l++) {
-                ssol s;
-                if (try_ad(c, n1c + i, kc + j, mc + l, signfree, &s) && better(&s, best)) *best = s;
-            }
+    for (up = 0; up <= 1 && !best->ok; up++) /* one sample longer only if needed */
+        for (i = -1; i <= up; i++)
+            for (j = -1; j <= up; j++)
+                for (l = -1; l <= up; l++) {
+                    ssol s;
+                    if (try_ad(c, n1c + i, kc + j, mc + l, signfree, &s) && better(&s, best))
+                        *best = s;
+                }
     return best->ok;
 }
 
@@ -528,9 +530,8 @@ static int solve_b23_once(const sctx *c, int branch, ssol *out)
      * branch (a deep dip needs both stages long, not in the ratio of the
      * shallow one), the cruise for the distance at vt. */
     out->ok = 0;
-    for (p = 0; p < 120; p++) {
-        double u = exp2(-(double)(p / 2) / 3.0); /* 1 .. 2^-20, from both ends */
-        double vt = p % 2 ? lo + (hi - lo) * u : hi - (hi - lo) * u;
+    for (p = 0; p <= 60; p++) {
+        double vt = hi - (hi - lo) * exp2(-p / 3.0); /* lo .. hi - 2^-20 (hi - lo) */
         ssol s;
         if (fit_ad(c, vt, &s) && better(&s, out)) *out = s;
     }
