@@ -70,6 +70,8 @@ BAD_PARAMETERS = [
     ({"x0": math.inf}, ["x0 = inf"]),
     ({"t_start": math.nan}, ["t_start = nan"]),
     ({"v_e": 0.9, "distance": 0.001}, ["distance = 0.001", "too short"]),
+    ({"v0": -0.0, "v_e": -0.9, "distance": -0.001},
+     ["distance = -0.001", "too short", "from 0 m/s to -0.9 m/s"]),
     ({"v_e": -0.2}, ["v_e = -0.2", "direction reverses"]),
     ({"n_segments": 3, "seg_distance": [0.2, 0.2, 0.2], "seg_v_end": [0.5, 2.0, 0.0]},
      ["seg_v_end[2] = 2"]),
