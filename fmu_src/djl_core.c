@@ -800,16 +800,33 @@ static djl_status infeasible(djl_error *err, const djl_params *p, int i, const s
                          "d_max = %g m/s2, Te = %g s): the planner found no profile landing "
                          "exactly on a sample although one should exist; please report it",
                          dname, D, vs, ve, c->vm, c->am, c->dm, c->Te);
-    if (c->last && c->ve != 0.0 && c->D >= dmin)
+    if (c->last && c->ve != 0.0 && c->D >= dmin) {
+        /* beyond the minimum, room for a dip worth one sample of travel at v
+         * (area a t^2/4 in a time t) and for the jerk times of its stages:
+         * an estimate the randomised C driver checks (in the user's terms:
+         * the residual carried in counts) */
+        double v = dmax2(c->vs, c->ve);
+        double room = dmin + fabs(D) - c->D +
+                      v * (2.0 * sqrt(v * c->Te / dmin2(c->am, c->dm)) +
+                           ((double)c->N1 + c->N2 + c->N3 + c->N4) * c->Te);
         return set_error(err, DJL_E_INFEASIBLE, dname, D,
                          "%s = %g m cannot end exactly on a sample at the non-zero end speed %g "
                          "m/s (from %g m/s, v_max = %g m/s, a_max = %g m/s2, d_max = %g m/s2, "
-                         "Te = %g s and the jerk times): just above the minimum of about %g m only "
-                         "some distances can; use a somewhat longer distance, or end at rest",
-                         dname, D, ve, vs, c->vm, c->am, c->dm, c->Te, dmin);
+                         "Te = %g s, the jerk times): the minimum is about %g m and from about "
+                         "%g m on every distance lands, only some in between (they need room "
+                         "for a speed dip); use a longer distance, or end at rest",
+                         dname, D, ve, vs, c->vm, c->am, c->dm, c->Te, dmin, room);
+    }
     if (fabs(c->D - fabs(D)) > 1e-12 * (fabs(D) + fabs(dmin)))
         snprintf(left, sizeof left, "; rounding the earlier segments to whole samples left it %g m",
                  c->D);
+    if (c->vs == c->ve && c->vs > 0.0)
+        return set_error(err, DJL_E_INFEASIBLE, dname, D,
+                         "%s = %g m cannot end exactly on a sample cruising at %g m/s (v_max = %g "
+                         "m/s, a_max = %g m/s2, d_max = %g m/s2, Te = %g s, the jerk times): a "
+                         "pure cruise covers whole samples of %g m, landing in between needs a "
+                         "speed dip, and a dip needs about %g m or more%s",
+                         dname, D, ve, c->vm, c->am, c->dm, c->Te, c->vs * c->Te, dmin, left);
     return set_error(err, DJL_E_INFEASIBLE, dname, D,
                      "%s = %g m is too short to go from %g m/s to %g m/s within v_max = %g m/s, "
                      "a_max = %g m/s2, d_max = %g m/s2 and the jerk times at Te = %g s: it needs "

@@ -82,7 +82,7 @@ typedef struct {
     djl_status status;
     char param[40];    /* offending parameter, e.g. "T_F2" or "seg_v_end[3]" ("" if none) */
     double value;      /* its value */
-    char message[400]; /* full sentence, names the parameter and the value */
+    char message[640]; /* full sentence, names the parameter and the value */
 } djl_error;
 
 /* One constant-jerk piece, valid for samples k .. next piece's k. */

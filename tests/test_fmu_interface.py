@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -70,6 +71,8 @@ BAD_PARAMETERS = [
     ({"x0": math.inf}, ["x0 = inf"]),
     ({"t_start": math.nan}, ["t_start = nan"]),
     ({"v_e": 0.9, "distance": 0.001}, ["distance = 0.001", "too short"]),
+    ({"profile": 2, "T_F1": 0.02, "v0": 1.0, "v_e": 1.0, "distance": 0.0404},
+     ["distance = 0.0404", "cruising at 1 m/s", "whole samples of 0.001 m", "speed dip"]),
     ({"v0": -0.0, "v_e": -0.9, "distance": -0.001},
      ["distance = -0.001", "too short", "from 0 m/s to -0.9 m/s"]),
     ({"v_e": -0.2}, ["v_e = -0.2", "direction reverses"]),
@@ -95,6 +98,22 @@ BAD_PARAMETERS = [
                               for p, _ in BAD_PARAMETERS])
 def test_bad_parameter_is_an_fmi_error_naming_it(fmu, params, fragments):
     _expect_init_error(fmu, params, *fragments)
+
+
+def test_non_zero_end_speed_refusal_says_from_where_every_distance_lands(fmu):
+    """The refusal gives the minimum and the distance from which all land; check both."""
+    p = {"profile": 2, "T_F1": 0.03, "v0": 0.9, "v_e": 1.0, "v_max": 1.0, "distance": 0.05774}
+    with GeneratorFMU(fmu, params=p) as g:
+        with pytest.raises(FMUError) as info:
+            g.initialize()
+    msg = str(info.value)
+    found = re.search(r"the minimum is about ([0-9.e+-]+) m and from about ([0-9.e+-]+) m on "
+                      r"every distance lands", msg)
+    assert found, msg
+    d_min, d_all = float(found.group(1)), float(found.group(2))
+    assert d_min <= p["distance"] < d_all
+    for d in np.linspace(d_all, 1.5 * d_all, 13):
+        check_end_and_limits(generate({**p, "distance": float(d)}, fmu=fmu))
 
 
 def test_step_not_a_multiple_of_Te(fmu):

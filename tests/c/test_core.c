@@ -185,6 +185,15 @@ int main(int argc, char **argv)
                                             2.0 * vm * room + 2.0 * dip)
                     FAIL("case %ld: long single move refused: %s", i, e.message);
             }
+            if (strlen(e.message) + 1 >= sizeof e.message)
+                FAIL("case %ld: message truncated: %s", i, e.message);
+            /* the distance from which the message says every distance lands */
+            if (strstr(e.message, "every distance lands")) {
+                const char *q = strstr(e.message, "and from about ");
+                if (!q || fabs(p.n_segments ? p.seg_distance[p.n_segments - 1] : p.distance) >=
+                              atof(q + strlen("and from about ")))
+                    FAIL("case %ld: refused a distance its message says lands: %s", i, e.message);
+            }
             if (!strstr(e.message, e.param)) FAIL("case %ld: %s", i, e.message);
         } else {
             FAIL("case %ld: %s: %s", i, djl_status_name(st), e.message);
