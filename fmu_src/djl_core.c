@@ -313,6 +313,22 @@ static double D_cont(const sctx *c, double vp, double kx)
     return c->Te * (K0 + vp * K1);
 }
 
+static int64_t ceil_len(double x)
+{
+    if (!(x < (double)DJL_MAX_MOTION_SAMPLES)) return DJL_MAX_MOTION_SAMPLES;
+    if (x < 0.0) return 0;
+    return (int64_t)ceil(x);
+}
+
+/* Whole-sample stage lengths for the peak vp, each f times as long (in
+ * effective samples) as the limits need. */
+static void stage_lengths(const sctx *c, double vp, double f, int64_t *n1, int64_t *m)
+{
+    double ea = need_eff(c, vp - c->vs, La(c)), ed = need_eff(c, c->ve - vp, Ld(c));
+    *n1 = imax2(ceil_len(f * ea - 0.5 * (c->N2 - c->N1)), nmin_a(c));
+    *m = imax2(ceil_len(f * ed - 0.5 * (c->N4 - c->N3)), nmin_d(c));
+}
+
 /* Exact solution of the AD structure for whole-sample lengths. */
 static int try_ad(const sctx *c, int64_t n1, int64_t k, int64_t m, int signfree, ssol *s)
 {
@@ -357,13 +373,6 @@ static int better(const ssol *a, const ssol *b)
     return a->vp > b->vp;
 }
 
-static int64_t ceil_len(double x)
-{
-    if (!(x < (double)DJL_MAX_MOTION_SAMPLES)) return DJL_MAX_MOTION_SAMPLES;
-    if (x < 0.0) return 0;
-    return (int64_t)ceil(x);
-}
-
 /* Round the continuous solution (vp, kx) to whole samples and keep the best
  * exact neighbour.  Rounding a length up usually lowers v_p, but not always:
  * with overlapping ramps of different lengths (short_stage = 2) a longer
@@ -371,12 +380,9 @@ static int64_t ceil_len(double x)
  * neighbour one sample shorter lands, those one sample longer are tried. */
 static int round_ad(const sctx *c, double vp, double kx, int signfree, ssol *best)
 {
-    double ea = need_eff(c, vp - c->vs, La(c));
-    double ed = need_eff(c, c->ve - vp, Ld(c));
-    int64_t n1c = imax2(ceil_len(ea - 0.5 * (c->N2 - c->N1)), nmin_a(c));
-    int64_t mc = imax2(ceil_len(ed - 0.5 * (c->N4 - c->N3)), nmin_d(c));
-    int64_t kc = imax2(ceil_len((double)kmin(c) + kx), kmin(c));
+    int64_t n1c, mc, kc = imax2(ceil_len((double)kmin(c) + kx), kmin(c));
     int i, j, l, up;
+    stage_lengths(c, vp, 1.0, &n1c, &mc);
     best->ok = 0;
     for (up = 0; up <= 1 && !best->ok; up++) /* one sample longer only if needed */
         for (i = -1; i <= up; i++)
@@ -450,33 +456,28 @@ static int solve_b1(const sctx *c0, ssol *out)
  * stages are resized for it (the total kept) until the limits hold. */
 static int fit_ad(const sctx *c, double vt, ssol *out)
 {
-    int64_t n1 = 0, m = 0, k;
-    double K0, K1, be, kr, v = vt;
+    int64_t n1, m, k;
+    double K0, K1, be, kr;
     int it;
     if (!(vt > 0.0)) return 0;
+    stage_lengths(c, vt, 1.0, &n1, &m);
+    ad_coeffs(c, (double)n1, (double)kmin(c), (double)m, &K0, &K1, &be);
+    kr = (double)kmin(c) + (c->D / c->Te - K0 - vt * K1) / vt;
+    if (!(kr > (double)kmin(c) - 1.0) || !(kr < (double)DJL_MAX_MOTION_SAMPLES)) return 0;
+    k = imax2(ceil_len(kr), kmin(c));
     for (it = 0; it < 8; it++) {
-        int64_t n1v = imax2(ceil_len(need_eff(c, v - c->vs, La(c)) - 0.5 * (c->N2 - c->N1)),
-                            nmin_a(c));
-        int64_t mv = imax2(ceil_len(need_eff(c, c->ve - v, Ld(c)) - 0.5 * (c->N4 - c->N3)),
-                           nmin_d(c));
-        if (it == 0) {
-            n1 = n1v;
-            m = mv;
-            ad_coeffs(c, (double)n1, (double)kmin(c), (double)m, &K0, &K1, &be);
-            kr = (double)kmin(c) + (c->D / c->Te - K0 - vt * K1) / vt;
-            if (!(kr > (double)kmin(c) - 1.0) || !(kr < (double)DJL_MAX_MOTION_SAMPLES)) return 0;
-            k = imax2(ceil_len(kr), kmin(c));
-        } else {
-            if (n1v <= n1 && mv <= m) return 0;
-            k -= imax2(n1v - n1, 0) + imax2(mv - m, 0);
-            n1 = imax2(n1, n1v);
-            m = imax2(m, mv);
-        }
+        int64_t n1v, mv;
+        double v;
         if (try_ad(c, n1, k, m, 1, out)) return 1;
-        if (k < kmin(c)) return 0;
         ad_coeffs(c, (double)n1, (double)k, (double)m, &K0, &K1, &be);
         v = (c->D / c->Te - K0) / K1;
         if (!isfinite(v)) return 0;
+        stage_lengths(c, v, 1.0, &n1v, &mv);
+        if (n1v <= n1 && mv <= m) return 0;
+        k -= imax2(n1v - n1, 0) + imax2(mv - m, 0);
+        if (k < kmin(c)) return 0;
+        n1 = imax2(n1, n1v);
+        m = imax2(m, mv);
     }
     return 0;
 }
@@ -504,13 +505,10 @@ static int solve_b23_once(const sctx *c, int branch, ssol *out)
     }
     /* Lengthen both stages until their accelerations fit the limits. */
     for (p = 1; p <= 40; p++) {
-        double ea = need_eff(c, vp - c->vs, La(c)), ed = need_eff(c, c->ve - vp, Ld(c));
-        double f = ldexp(1.0, p);
-        int64_t n1 = imax2(ceil_len(f * ea - 0.5 * (c->N2 - c->N1)), nmin_a(c));
-        int64_t m = imax2(ceil_len(f * ed - 0.5 * (c->N4 - c->N3)), nmin_d(c));
         double K0, K1, be, kr;
-        int64_t k;
+        int64_t n1, m, k;
         int j;
+        stage_lengths(c, vp, ldexp(1.0, p), &n1, &m);
         ad_coeffs(c, (double)n1, (double)kmin(c), (double)m, &K0, &K1, &be);
         if (!(vp > 0.0)) break;
         kr = (double)kmin(c) + (c->D / c->Te - K0 - vp * K1) / vp;
