@@ -24,6 +24,7 @@ written with plain arithmetic (no numpy on the scalar path).
 from __future__ import annotations
 
 import bisect
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -63,6 +64,10 @@ class ConstantLaw:
         """Frequency (Hz) at position ``z`` (m)."""
         return self.f
 
+    def array(self, z: np.ndarray) -> np.ndarray:
+        """Frequencies (Hz) at an array of positions (m)."""
+        return np.full(np.shape(z), self.f)
+
     def check_range(self, z_min: float, z_max: float) -> None:
         """Accept any range (a constant law is valid everywhere)."""
 
@@ -99,6 +104,10 @@ class LinearLaw:
     def __call__(self, z: float) -> float:
         """Frequency (Hz) at position ``z`` (m)."""
         return self.f[0] + self._slope * (z - self.z[0])
+
+    def array(self, z: np.ndarray) -> np.ndarray:
+        """Frequencies (Hz) at an array of positions (m); the same arithmetic as a call."""
+        return self.f[0] + self._slope * (np.asarray(z, dtype=float) - self.z[0])
 
     def check_range(self, z_min: float, z_max: float) -> None:
         """Raise ValueError if the frequency is not > 0 over [z_min, z_max]."""
@@ -148,6 +157,17 @@ class TableLaw:
             return fs[-1]
         z0, z1 = zs[i - 1], zs[i]
         return fs[i - 1] + (fs[i] - fs[i - 1]) * (z - z0) / (z1 - z0)
+
+    def array(self, z: np.ndarray) -> np.ndarray:
+        """Frequencies (Hz) at an array of positions (m); the same arithmetic as a call."""
+        z = np.asarray(z, dtype=float)
+        zs = np.asarray(self.z)
+        fs = np.asarray(self.f)
+        i = np.clip(np.searchsorted(zs, z, side="right"), 1, zs.size - 1)
+        z0, z1, f0, f1 = zs[i - 1], zs[i], fs[i - 1], fs[i]
+        out = f0 + (f1 - f0) * (z - z0) / (z1 - z0)
+        out = np.where(z < zs[0], fs[0], out)
+        return np.where(z >= zs[-1], fs[-1], out)
 
     def check_range(self, z_min: float, z_max: float) -> None:
         """Raise ValueError if the table does not cover [z_min, z_max]."""
@@ -201,6 +221,11 @@ class CantileverLaw:
     def __call__(self, z: float) -> float:
         """Frequency (Hz) at ``z`` (m)."""
         r = self.L_ref / (self.L_ref + self.direction * (z - self.z_ref))
+        return self.f_ref * r * r
+
+    def array(self, z: np.ndarray) -> np.ndarray:
+        """Frequencies (Hz) at an array of positions (m); the same arithmetic as a call."""
+        r = self.L_ref / (self.L_ref + self.direction * (np.asarray(z, dtype=float) - self.z_ref))
         return self.f_ref * r * r
 
     def check_range(self, z_min: float, z_max: float) -> None:
@@ -260,9 +285,19 @@ class ModeSpec:
         return self.law(z) * self.scale
 
     def f_array(self, z: np.ndarray) -> np.ndarray:
-        """Frequencies (Hz) at an array of positions."""
-        return np.array([self.law(float(zz)) for zz in np.ravel(z)]).reshape(np.shape(z)) \
-            * self.scale
+        """Frequencies (Hz) at an array of positions (the same values as :meth:`f`)."""
+        f = self.law.array(np.asarray(z, dtype=float))
+        return f if self.scale == 1.0 else f * self.scale
+
+    def scaled(self, factor: float) -> ModeSpec:
+        """The same mode with every frequency multiplied by ``factor`` (> 0).
+
+        A map error of e (the whole f(z) law off by 1 + e) is ``scaled(1 + e)``;
+        it is carried as a load-mass ratio 1/factor², so ``f = law(z) · factor``.
+        """
+        if not (math.isfinite(factor) and factor > 0):
+            raise ValueError(f"frequency factor must be a finite number > 0, got {factor!r}")
+        return dataclasses.replace(self, mass_ratio=self.mass_ratio / (factor * factor))
 
     def period(self, z: float) -> float:
         """Natural period (s) at ``z``."""
@@ -276,7 +311,7 @@ class ModeSpec:
         """Return the mode as a :class:`harness.plant.ScheduledMode`."""
         law, s = self.law, self.scale
         fz = law if s == 1.0 else (lambda z: law(z) * s)
-        return ScheduledMode(fz, self.zeta, self.gain, self.name)
+        return ScheduledMode(fz, self.zeta, self.gain, self.name, f_of_z_array=self.f_array)
 
     def check_range(self, z_min: float, z_max: float) -> None:
         """Raise ValueError if the law is not valid over [z_min, z_max]."""
@@ -321,6 +356,10 @@ class ModeMap:
     def scheduled(self) -> list[ScheduledMode]:
         """Return the modes for :class:`harness.plant.ScheduledPlant`."""
         return [m.scheduled() for m in self.modes]
+
+    def scaled(self, factor: float) -> ModeMap:
+        """The map with every mode's frequency multiplied by ``factor`` (a map error 1 + e)."""
+        return ModeMap(tuple(m.scaled(factor) for m in self.modes), self.tune)
 
     def check_range(self, z_min: float, z_max: float) -> None:
         """Raise ValueError naming the mode whose law is invalid over the range."""

@@ -459,12 +459,25 @@ class ScheduledMode:
         Participation factor (see :class:`Mode`).
     name : str
         Label.
+    f_of_z_array : callable, optional
+        The same law on an array of positions (vectorised, same values); used
+        by the fast engine (:mod:`harness.engine`).  Without it the scalar law
+        is applied element by element.
     """
 
     f_of_z: Callable[[float], float]
     zeta: float
     gain: float = 1.0
     name: str = ""
+    f_of_z_array: Callable[[np.ndarray], np.ndarray] | None = None
+
+    def f_array(self, z: np.ndarray) -> np.ndarray:
+        """Frequencies (Hz) at an array of positions (m)."""
+        z = np.asarray(z, dtype=float)
+        if self.f_of_z_array is not None:
+            return np.asarray(self.f_of_z_array(z), dtype=float)
+        law = self.f_of_z
+        return np.fromiter((law(zz) for zz in z.ravel().tolist()), float, z.size).reshape(z.shape)
 
     def at(self, z: float) -> Mode:
         """Return the frozen mode at position ``z``."""
