@@ -45,7 +45,11 @@ from .plant import Mode, ScheduledMode, ScheduledPlant, free_amplitude, free_res
 from .scenario import Scenario, load_scenario
 from .tuning import TuningResult, tune_djl, tune_jl
 
+ENGINES = ("fmu", "fast")
+"""Evaluation engines: the generator FMUs through fmpy, or the compiled engine."""
+
 __all__ = [
+    "ENGINES",
     "CoSimResult",
     "ProfileMetrics",
     "profile_metrics",
@@ -105,6 +109,13 @@ class CoSimResult:
         Plant state at the last point (for extending the record analytically).
     final_modes : list of Mode
         The modes at the last point.
+    plan_info : dict
+        What the generators planned, as the FMU reports it (identifies the move
+        exactly): ``motion_time``, ``N_F``, ``v_reached``, ``a_reached``,
+        ``d_reached``, ``distance``, ``x0`` of the excited axis; ``z0``,
+        ``z_distance``, ``z_v_max``, ``z_motion_time`` of the Z axis.
+    engine : str
+        ``"fmu"`` (generator FMUs through fmpy) or ``"fast"`` (compiled engine).
     """
 
     profile: str
@@ -134,6 +145,8 @@ class CoSimResult:
     wall_time: float = 0.0
     final_state: list[float] = field(default_factory=list)
     final_modes: list[Mode] = field(default_factory=list)
+    plan_info: dict[str, Any] = field(default_factory=dict)
+    engine: str = "fmu"
 
     @property
     def motion_time(self) -> float:
@@ -311,25 +324,55 @@ def cosimulate(
         z_v_max=float(z_params.get("v_max", math.nan)), fmi_version=gx.fmi_version,
         wall_time=wall, final_state=list(plant.state),
         final_modes=[m.at(float(Za[-1, 0])) for m in plant.modes],
+        plan_info=plan_info(axis, z_axis, T_x, T_z),
     )
+
+
+def plan_info(axis: Any, z_axis: Any, T_x: float, T_z: float) -> dict[str, Any]:
+    """What both generators planned (see :attr:`CoSimResult.plan_info`)."""
+    return {
+        "motion_time": T_x, "N_F": axis.N_F(),
+        "v_reached": float(axis.get("v_reached")), "a_reached": float(axis.get("a_reached")),
+        "d_reached": float(axis.get("d_reached")), "distance": float(axis.get("distance")),
+        "x0": float(axis.get("x0")), "z0": float(z_axis.get("x0")),
+        "z_distance": float(z_axis.get("distance")), "z_v_max": float(z_axis.get("v_max")),
+        "z_motion_time": T_z,
+    }
 
 
 # ------------------------------------------------------------- scenarios
 
 
 class Session:
-    """The two generator FMU instances a scenario runs on (re-planned, not re-created).
+    """The two generator instances a scenario runs on (re-planned, not re-created).
 
     Parameters
     ----------
     fmu : path-like, optional
-        Generator FMU file; default: the package's own FMU for ``fmi_version``.
+        Generator FMU file; default: the package's own FMU for ``fmi_version``
+        (engine ``"fmu"`` only).
     fmi_version : {2, 3}
-        FMI version of the package's FMU.
+        FMI version of the package's FMU (engine ``"fmu"`` only).
+    engine : {"fmu", "fast"}
+        ``"fmu"``: the generator FMUs driven through fmpy, one FMI call per
+        communication step (the reference: the FMU drives the plant).
+        ``"fast"``: the same generator core (``fmu_src/djl_core.c``) and the
+        same plant, compiled into the extension module ``harness._engine`` and
+        called once per move (:mod:`harness.engine`); equal results, about a
+        hundred times faster.
     """
 
-    def __init__(self, fmu: str | Path | None = None, fmi_version: int = 2) -> None:
-        self.fmu, self.fmi_version = fmu, fmi_version
+    def __init__(self, fmu: str | Path | None = None, fmi_version: int = 2,
+                 engine: str = "fmu") -> None:
+        if engine not in ENGINES:
+            raise ValueError(f"unknown engine {engine!r}: choose from {', '.join(ENGINES)}")
+        self.fmu, self.fmi_version, self.engine = fmu, fmi_version, engine
+        if engine == "fast":
+            from .engine import FastAxis
+
+            self.axis: Any = FastAxis(name="excited_axis")
+            self.z_axis: Any = FastAxis(name="z_axis")
+            return
         self.axis = AxisFMU(fmu, fmi_version=fmi_version, name="excited_axis")
         try:
             self.z_axis = AxisFMU(fmu, fmi_version=fmi_version, name="z_axis")
@@ -420,15 +463,21 @@ class Session:
             t_stop = sc.move.t_start + max(T_x, T_z) + sc.simulation.t_after
         h = sc.simulation.step
         t_stop = h * math.ceil(t_stop / h - 1e-9)
-        run = cosimulate(self.axis, self.z_axis, params, zp, sc.modemap.scheduled(), t_stop, h,
-                         profile=profile)
+        if self.engine == "fast":
+            from .engine import cosimulate_fast
+
+            run = cosimulate_fast(self.axis, self.z_axis, params, zp, sc.modemap.scheduled(),
+                                  t_stop, h, profile=profile)
+        else:
+            run = cosimulate(self.axis, self.z_axis, params, zp, sc.modemap.scheduled(), t_stop,
+                             h, profile=profile)
         run.z_synced = synced
         return run
 
 
 def run_scenario(scenario: Scenario | str | Path, *, fmu: str | Path | None = None,
                  fmi_version: int | None = None, progress: bool = False,
-                 session: Session | None = None):
+                 session: Session | None = None, engine: str | None = None):
     """Run a scenario: one call from a TOML file (or embedded name) to the results.
 
     Parameters
@@ -443,7 +492,10 @@ def run_scenario(scenario: Scenario | str | Path, *, fmu: str | Path | None = No
     progress : bool
         Show a tqdm progress bar over the cases of a sweep (only on a TTY).
     session : Session, optional
-        FMU instances to reuse (must match the scenario's FMU).
+        Generator instances to reuse (must match the scenario's FMU and the engine).
+    engine : {"fmu", "fast"}, optional
+        Evaluation engine (see :class:`Session`); default: ``"fmu"`` for a single
+        move (the FMU drives the plant), ``"fast"`` for a sweep.
 
     Returns
     -------
@@ -458,7 +510,9 @@ def run_scenario(scenario: Scenario | str | Path, *, fmu: str | Path | None = No
         sc = sc.with_fmu(Path(fmu) if fmu is not None else None, fmi_version)
     own = session is None
     if session is None:
-        session = Session(sc.simulation.fmu, sc.simulation.fmi_version)
+        if engine is None:
+            engine = "fast" if sc.is_sweep else "fmu"
+        session = Session(sc.simulation.fmu, sc.simulation.fmi_version, engine=engine)
     try:
         if not sc.is_sweep:
             return run_case(sc, session)

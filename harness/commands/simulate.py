@@ -65,6 +65,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--fmu", type=Path, default=None, metavar="PATH",
                    help="a generator FMU file with the same variables (overrides the "
                         "scenario's)")
+    p.add_argument("--engine", choices=("fmu", "fast"), default=None,
+                   help="fmu: the generator FMUs stepped through fmpy (the reference); fast: the "
+                        "same generator core and plant compiled, called once per move (default: "
+                        "fmu for single moves, fast for sweeps)")
     p.add_argument("--no-plot", action="store_true", help="do not write the PNG figures")
     p.add_argument("--list", action="store_true",
                    help="list the embedded scenarios and exit")
@@ -109,7 +113,7 @@ def _run(args: argparse.Namespace) -> int:
     results = []
     try:
         for sc in scenarios:
-            results.append(run_scenario(sc, progress=not args.quiet))
+            results.append(run_scenario(sc, progress=not args.quiet, engine=args.engine))
     except (FMUError, ValueError, OSError) as e:
         raise CommandError(1, f"simulation failed ({sc.name}): {e}") from None
 
