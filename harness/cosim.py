@@ -6,11 +6,14 @@ The master steps, at every communication point t_k = k·h,
    (a JL move), both by ``fmi2DoStep`` / ``fmi3DoStep`` through fmpy;
 2. reads their outputs: the acceleration a of the excited axis, the position
    and velocity (z, v_z) of Z;
-3. advances the plant (:class:`harness.plant.ScheduledPlant`) over [t_k, t_k+1]:
-   the acceleration is linear between the two communication points (exact when
-   h = Te, since the generator's jerk is constant over each sample), and each
-   mode's frequency is frozen at f(z(t_k + h/2)), with z at mid-step from the
-   cubic Hermite interpolant of (z, v_z) (exact when h = Te).
+3. advances the plant (:class:`harness.plant.ScheduledPlant`) over [t_k, t_k+1]
+   with the input a_k + j_k·(t - t_k): the generator's acceleration at t_k and
+   its jerk over the interval that starts there (exact when h = Te for every
+   profile, AL's acceleration steps included: a sample interval has one
+   constant jerk; for h = m·Te, m > 1, the jerk of the first sample is held
+   over the step, an approximation), and each mode's frequency is frozen at
+   f(z(t_k + h/2)), with z at mid-step from the cubic Hermite interpolant of
+   (z, v_z) (exact when h = Te).
 
 No python-control object is built in the loop: a step costs two ``doStep``,
 two ``getReal`` and a few microseconds of plant arithmetic.
@@ -263,7 +266,7 @@ def cosimulate(
                              f"{name}'s Te = {te:g} s")
     n = int(round(t_stop / h))
     plant = ScheduledPlant(modes)
-    pstep = plant.step
+    pstep = plant.step_jerk
     v3x, v3z = gx.fmi_version == 3, gz.fmi_version == 3
     getx = gx.fmu.getFloat64 if v3x else gx.fmu.getReal
     getz = gz.fmu.getFloat64 if v3z else gz.fmu.getReal
@@ -293,7 +296,7 @@ def cosimulate(
             ox1 = getx(vrx)
             oz1 = getz(vrz)
             zm = 0.5 * (oz[0] + oz1[0]) + half * (oz[1] - oz1[1])
-            E.append(pstep(h, ox[2], ox1[2], zm))
+            E.append(pstep(h, ox[2], ox[3], zm))
             S.append(tuple(plant.state))
             X.append(ox1)
             Z.append(oz1)
@@ -310,8 +313,7 @@ def cosimulate(
     Sa = np.asarray(S, dtype=float)
     nm = len(plant.modes)
     eps_modes = Sa[:, 0::2].T.copy()
-    f = np.vstack([np.fromiter((m.f_of_z(zz) for zz in Za[:, 0].tolist()), float, n + 1)
-                   for m in plant.modes])
+    f = np.vstack([m.f_array(Za[:, 0]) for m in plant.modes])
     state_end = [(float(Sa[k_end, 2 * i]), float(Sa[k_end, 2 * i + 1])) for i in range(nm)]
     modes_end = [m.at(float(Za[k_end, 0])) for m in plant.modes]
     x0 = float(params.get("x0", gx.get("x0")))

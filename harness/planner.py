@@ -263,7 +263,7 @@ def stage_starts(move: MoveSamples) -> tuple[list[float], bool]:
 
 
 def sync_z_velocity(
-    axis: AxisFMU,
+    axis: Any,
     params: Mapping[str, Any],
     target_time: float,
     v_cap: float,
@@ -277,8 +277,9 @@ def sync_z_velocity(
 
     Parameters
     ----------
-    axis : AxisFMU
-        The instance to plan with (it is left planned with the result).
+    axis : AxisFMU or harness.engine.FastAxis
+        The instance to plan with (it is left planned with the result); a
+        :class:`~harness.engine.FastAxis` runs the same bisection compiled.
     params : mapping
         The Z move's parameters except ``v_max``.
     target_time : float
@@ -297,6 +298,8 @@ def sync_z_velocity(
     synced : bool
         False when even ``v_cap`` is too slow (the Z move then ends later).
     """
+    if hasattr(axis, "sync_velocity"):  # the fast engine: the same bisection, compiled
+        return axis.sync_velocity(params, target_time, v_cap, start_time)
     p = dict(params)
     d = abs(float(p["distance"]))
 

@@ -72,6 +72,7 @@ __all__ = [
     "mode_ss",
     "simulate_mode",
     "step_mode",
+    "step_mode_jerk",
     "transition",
 ]
 
@@ -231,6 +232,50 @@ def step_mode(
     c = math.cos(wd * h)
     s = math.sin(wd * h) / wd
     beta = -gain * (u1 - u0) / (h * w2)
+    alpha = (-gain * u0 - 2.0 * sig * beta) / w2
+    d1 = eps - alpha
+    d2 = deps - beta
+    return (alpha + beta * h + e * ((c + sig * s) * d1 + s * d2),
+            beta + e * (-w2 * s * d1 + (c - sig * s) * d2))
+
+
+def step_mode_jerk(
+    eps: float, deps: float, omega: float, zeta: float, gain: float, h: float,
+    u0: float, jerk: float,
+) -> tuple[float, float]:
+    """Advance one mode exactly over a step whose input has a constant jerk.
+
+    The input is q̈(t_k + τ) = ``u0`` + ``jerk``·τ over the step: the
+    generator's own semantics (``a`` at a sample, ``j`` over the sample
+    interval that starts there), exact for every profile when the step is one
+    sample, AL's acceleration steps included.  Same formula as
+    :func:`step_mode` with the slope given instead of the end value.
+
+    Parameters
+    ----------
+    eps, deps : float
+        State at the start of the step (m, m/s).
+    omega, zeta, gain : float
+        Mode parameters (rad/s, -, -).
+    h : float
+        Step (s).
+    u0 : float
+        Reference acceleration at the start of the step (m/s²).
+    jerk : float
+        Reference jerk over the step (m/s³).
+
+    Returns
+    -------
+    tuple of float
+        (ε, ε̇) at the end of the step.
+    """
+    sig = zeta * omega
+    w2 = omega * omega
+    wd = omega * math.sqrt(1.0 - zeta * zeta)
+    e = math.exp(-sig * h)
+    c = math.cos(wd * h)
+    s = math.sin(wd * h) / wd
+    beta = -gain * jerk / w2
     alpha = (-gain * u0 - 2.0 * sig * beta) / w2
     d1 = eps - alpha
     d2 = deps - beta
@@ -539,6 +584,34 @@ class ScheduledPlant:
                 raise ValueError(f"mode {i}: frequency {f!r} Hz at z = {z_mid} m is not > 0")
             e, de = step_mode(st[2 * i], st[2 * i + 1], two_pi * f, self._zeta[i],
                               self._gain[i], h, u0, u1)
+            st[2 * i] = e
+            st[2 * i + 1] = de
+            total += e
+        return total
+
+    def step_jerk(self, h: float, u0: float, jerk: float, z_mid: float) -> float:
+        """Advance all modes by ``h`` with the input u0 + jerk·τ; return Σε at the end.
+
+        Parameters
+        ----------
+        h : float
+            Step (s).
+        u0 : float
+            Reference acceleration at the start of the step (m/s²).
+        jerk : float
+            Reference jerk over the step (m/s³): the generator's ``j`` output.
+        z_mid : float
+            Z position at mid-step (m), see :func:`hermite_mid`.
+        """
+        st = self.state
+        total = 0.0
+        two_pi = 2.0 * math.pi
+        for i, law in enumerate(self._laws):
+            f = law(z_mid)
+            if not f > 0.0:
+                raise ValueError(f"mode {i}: frequency {f!r} Hz at z = {z_mid} m is not > 0")
+            e, de = step_mode_jerk(st[2 * i], st[2 * i + 1], two_pi * f, self._zeta[i],
+                                   self._gain[i], h, u0, jerk)
             st[2 * i] = e
             st[2 * i + 1] = de
             total += e

@@ -1,0 +1,669 @@
+/*
+ * _engine.c -- the harness's compiled evaluation path (CPython extension module).
+ *
+ * Everything the co-simulation does once per sample, done in C and called
+ * once per move:
+ *
+ *  - plan a move with the FMU's own generator core (fmu_src/djl_core.c: the
+ *    very code the FMU runs, linked in, not re-implemented) and sample it on
+ *    the FMU's time grid (start time + n Te, the motion starting at the first
+ *    sample at or after t_start, exactly as fmu_model.c does);
+ *  - synchronise the Z move (bisection on v_max, the same arithmetic as
+ *    harness.planner.sync_z_velocity);
+ *  - step the scheduled plant: every mode advanced exactly over each step for
+ *    the input a_k + j_k tau (constant jerk over the step), with its frequency
+ *    given per step (the same arithmetic as harness.plant.step_mode_jerk).
+ *
+ * Arrays are exchanged through the buffer protocol (numpy arrays allocated by
+ * the Python side, harness/engine.py): the module needs no numpy headers.
+ * No FMI code here.  Units: SI.
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "djl_core.h"
+
+/* 2 pi as Python's 2.0 * math.pi (doubling is exact) */
+#define DJL_TWO_PI 6.283185307179586476925286766559
+
+static PyObject *PlanError; /* subclass of ValueError */
+
+/* ---------------------------------------------------------------- Plan */
+
+typedef struct {
+    PyObject_HEAD
+    djl_plan plan;
+    double t_start;    /* s, requested start of the motion */
+    double start_time; /* s, start of the sample grid */
+    double offset;     /* samples from start_time to the motion start (integral) */
+    int shifted;       /* t_start was not on the grid: moved to the next sample */
+} PlanObject;
+
+static PyTypeObject PlanType;
+
+static int get_double(PyObject *v, const char *key, double *out)
+{
+    double x;
+    if (PyBool_Check(v) || !(PyFloat_Check(v) || PyLong_Check(v))) {
+        PyErr_Format(PyExc_TypeError, "parameter %s must be a number, got %R", key, v);
+        return -1;
+    }
+    x = PyFloat_AsDouble(v);
+    if (x == -1.0 && PyErr_Occurred()) {
+        PyErr_Clear();
+        PyErr_Format(PyExc_ValueError, "parameter %s = %R is not representable as a double",
+                     key, v);
+        return -1;
+    }
+    *out = x;
+    return 0;
+}
+
+static int get_int32(PyObject *v, const char *key, int32_t *out)
+{
+    long x;
+    if (PyFloat_Check(v)) {
+        double d = PyFloat_AsDouble(v);
+        if (!(isfinite(d) && d == floor(d) && fabs(d) < 2147483647.0)) {
+            PyErr_Format(PyExc_ValueError, "parameter %s must be an integer, got %R", key, v);
+            return -1;
+        }
+        *out = (int32_t)d;
+        return 0;
+    }
+    if (PyBool_Check(v) || !PyLong_Check(v)) {
+        PyErr_Format(PyExc_TypeError, "parameter %s must be an integer, got %R", key, v);
+        return -1;
+    }
+    x = PyLong_AsLong(v);
+    if ((x == -1 && PyErr_Occurred()) || x < INT32_MIN || x > INT32_MAX) {
+        PyErr_Clear();
+        PyErr_Format(PyExc_ValueError, "parameter %s = %R is out of the Int32 range", key, v);
+        return -1;
+    }
+    *out = (int32_t)x;
+    return 0;
+}
+
+static int get_array(PyObject *v, const char *key, double *out, int n)
+{
+    PyObject *seq = PySequence_Fast(v, "");
+    Py_ssize_t len, i;
+    if (!seq) {
+        PyErr_Clear();
+        PyErr_Format(PyExc_TypeError, "parameter %s must be a sequence of numbers", key);
+        return -1;
+    }
+    len = PySequence_Fast_GET_SIZE(seq);
+    if (len > n) {
+        Py_DECREF(seq);
+        PyErr_Format(PyExc_ValueError, "parameter %s has %zd values, at most %d", key, len, n);
+        return -1;
+    }
+    for (i = 0; i < len; i++) {
+        if (get_double(PySequence_Fast_GET_ITEM(seq, i), key, &out[i]) < 0) {
+            Py_DECREF(seq);
+            return -1;
+        }
+    }
+    Py_DECREF(seq);
+    return 0;
+}
+
+/* Fill p (from the defaults) and t_start from a dict of FMU parameter names. */
+static int parse_params(PyObject *dict, djl_params *p, double *t_start)
+{
+    PyObject *key, *value;
+    Py_ssize_t pos = 0;
+    djl_params_default(p);
+    *t_start = 0.0;
+    if (!PyDict_Check(dict)) {
+        PyErr_SetString(PyExc_TypeError, "params must be a dict of FMU parameter names");
+        return -1;
+    }
+    while (PyDict_Next(dict, &pos, &key, &value)) {
+        const char *k;
+        int rc;
+        if (!PyUnicode_Check(key)) {
+            PyErr_Format(PyExc_TypeError, "parameter names must be strings, got %R", key);
+            return -1;
+        }
+        k = PyUnicode_AsUTF8(key);
+        if (!k) return -1;
+        if (!strcmp(k, "profile")) rc = get_int32(value, k, &p->profile);
+        else if (!strcmp(k, "short_stage")) rc = get_int32(value, k, &p->short_stage);
+        else if (!strcmp(k, "n_segments")) rc = get_int32(value, k, &p->n_segments);
+        else if (!strcmp(k, "Te")) rc = get_double(value, k, &p->Te);
+        else if (!strcmp(k, "t_start")) rc = get_double(value, k, t_start);
+        else if (!strcmp(k, "x0")) rc = get_double(value, k, &p->x0);
+        else if (!strcmp(k, "v0")) rc = get_double(value, k, &p->v0);
+        else if (!strcmp(k, "distance")) rc = get_double(value, k, &p->distance);
+        else if (!strcmp(k, "v_e")) rc = get_double(value, k, &p->v_e);
+        else if (!strcmp(k, "v_max")) rc = get_double(value, k, &p->v_max);
+        else if (!strcmp(k, "a_max")) rc = get_double(value, k, &p->a_max);
+        else if (!strcmp(k, "d_max")) rc = get_double(value, k, &p->d_max);
+        else if (!strcmp(k, "T_F1")) rc = get_double(value, k, &p->T_F[0]);
+        else if (!strcmp(k, "T_F2")) rc = get_double(value, k, &p->T_F[1]);
+        else if (!strcmp(k, "T_F3")) rc = get_double(value, k, &p->T_F[2]);
+        else if (!strcmp(k, "T_F4")) rc = get_double(value, k, &p->T_F[3]);
+        else if (!strcmp(k, "seg_distance"))
+            rc = get_array(value, k, p->seg_distance, DJL_MAX_SEGMENTS);
+        else if (!strcmp(k, "seg_v_end"))
+            rc = get_array(value, k, p->seg_v_end, DJL_MAX_SEGMENTS);
+        else {
+            PyErr_Format(PyExc_KeyError, "unknown generator parameter %R", key);
+            return -1;
+        }
+        if (rc < 0) return -1;
+    }
+    return 0;
+}
+
+static int set_attr_new(PyObject *obj, const char *name, PyObject *value)
+{
+    int rc;
+    if (!value) return -1;
+    rc = PyObject_SetAttrString(obj, name, value);
+    Py_DECREF(value);
+    return rc;
+}
+
+static PyObject *raise_plan_error(const djl_error *err, djl_status st)
+{
+    PyObject *exc, *args;
+    args = Py_BuildValue("(s)", err->message);
+    if (!args) return NULL;
+    exc = PyObject_Call(PlanError, args, NULL);
+    Py_DECREF(args);
+    if (!exc) return NULL;
+    if (set_attr_new(exc, "status", PyUnicode_FromString(djl_status_name(st))) < 0 ||
+        set_attr_new(exc, "param", PyUnicode_FromString(err->param)) < 0 ||
+        set_attr_new(exc, "value", PyFloat_FromDouble(err->value)) < 0) {
+        Py_DECREF(exc);
+        return NULL;
+    }
+    PyErr_SetObject(PlanError, exc);
+    Py_DECREF(exc);
+    return NULL;
+}
+
+/* Plan p into plan (the FMU's ensure_plan, without FMI): status, or -1 with a
+ * Python error set for the time mapping. */
+static djl_status plan_into(const djl_params *p, double t_start, double start_time,
+                            djl_plan *plan, djl_error *err, double *offset, int *shifted)
+{
+    djl_status st = djl_plan_motion(p, plan, err);
+    double off;
+    if (st != DJL_OK) return st;
+    if (!isfinite(t_start) || !isfinite(start_time)) {
+        err->status = DJL_E_PARAM;
+        snprintf(err->param, sizeof err->param, "t_start");
+        err->value = t_start;
+        snprintf(err->message, sizeof err->message,
+                 "invalid parameter t_start = %g s: must be finite", t_start);
+        return DJL_E_PARAM;
+    }
+    off = (t_start - start_time) / p->Te;
+    if (!isfinite(off) || fabs(off) > 1e15) {
+        err->status = DJL_E_PARAM;
+        snprintf(err->param, sizeof err->param, "t_start");
+        err->value = t_start;
+        snprintf(err->message, sizeof err->message,
+                 "t_start = %g s is %g samples of Te = %g s away from the start time %g s: too "
+                 "far", t_start, off, p->Te, start_time);
+        return DJL_E_PARAM;
+    }
+    *shifted = 0;
+    if (fabs(off - floor(off + 0.5)) <= 1e-9 * (1.0 + fabs(off)))
+        off = floor(off + 0.5);
+    else {
+        off = ceil(off);
+        *shifted = 1;
+    }
+    *offset = off;
+    return DJL_OK;
+}
+
+static PyObject *engine_plan(PyObject *self, PyObject *args, PyObject *kwds)
+{
+    static char *kwlist[] = {"params", "start_time", NULL};
+    PyObject *dict;
+    double start_time = 0.0;
+    djl_params p;
+    djl_error err;
+    djl_status st;
+    PlanObject *obj;
+    (void)self;
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "O|d", kwlist, &dict, &start_time))
+        return NULL;
+    obj = PyObject_New(PlanObject, &PlanType);
+    if (!obj) return NULL;
+    if (parse_params(dict, &p, &obj->t_start) < 0) {
+        Py_DECREF(obj);
+        return NULL;
+    }
+    obj->start_time = start_time;
+    memset(&err, 0, sizeof err);
+    st = plan_into(&p, obj->t_start, start_time, &obj->plan, &err, &obj->offset, &obj->shifted);
+    if (st != DJL_OK) {
+        Py_DECREF(obj);
+        return raise_plan_error(&err, st);
+    }
+    return (PyObject *)obj;
+}
+
+/* A writable C-contiguous float64 buffer of at least n elements. */
+static int get_out_buffer(PyObject *o, Py_buffer *view, Py_ssize_t n, const char *what)
+{
+    if (PyObject_GetBuffer(o, view, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0)
+        return -1;
+    if (view->itemsize != 8 || !view->format || strcmp(view->format, "d") != 0 ||
+        view->len < n * 8) {
+        PyErr_Format(PyExc_ValueError, "%s must be a C-contiguous float64 array of at least %zd "
+                     "values", what, n);
+        PyBuffer_Release(view);
+        return -1;
+    }
+    return 0;
+}
+
+static int get_in_buffer(PyObject *o, Py_buffer *view, Py_ssize_t n, const char *what)
+{
+    if (PyObject_GetBuffer(o, view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) return -1;
+    if (view->itemsize != 8 || !view->format || strcmp(view->format, "d") != 0 ||
+        view->len < n * 8) {
+        PyErr_Format(PyExc_ValueError, "%s must be a C-contiguous float64 array of at least %zd "
+                     "values", what, n);
+        PyBuffer_Release(view);
+        return -1;
+    }
+    return 0;
+}
+
+#define N_SAMPLE_VARS 7
+
+/* Plan.sample_into(out, n0, step, count): out[i, k] for k < count holds variable i
+ * (x, v, a, j, x_AL, v_AL, a_AL) at the FMU sample n0 + k * step. */
+static PyObject *plan_sample_into(PlanObject *self, PyObject *args)
+{
+    PyObject *out;
+    long long n0, step;
+    Py_ssize_t count, k;
+    Py_buffer view;
+    double *buf;
+    int32_t cursor = 0;
+    djl_sample s;
+    if (!PyArg_ParseTuple(args, "OLLn", &out, &n0, &step, &count)) return NULL;
+    if (count < 0 || step < 1) {
+        PyErr_SetString(PyExc_ValueError, "count must be >= 0 and step >= 1");
+        return NULL;
+    }
+    if (get_out_buffer(out, &view, (Py_ssize_t)N_SAMPLE_VARS * count, "out") < 0) return NULL;
+    buf = (double *)view.buf;
+    Py_BEGIN_ALLOW_THREADS
+    for (k = 0; k < count; k++) {
+        double u = (double)(n0 + (long long)k * step) - self->offset;
+        djl_eval(&self->plan, u, &cursor, &s);
+        buf[k] = s.x;
+        buf[count + k] = s.v;
+        buf[2 * count + k] = s.a;
+        buf[3 * count + k] = s.j;
+        buf[4 * count + k] = s.x_al;
+        buf[5 * count + k] = s.v_al;
+        buf[6 * count + k] = s.a_al;
+    }
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&view);
+    Py_RETURN_NONE;
+}
+
+/* Plan.at(n): (x, v, a, j, x_AL, v_AL, a_AL, done, segment) at FMU sample n (may be fractional). */
+static PyObject *plan_at(PlanObject *self, PyObject *args)
+{
+    double n;
+    int32_t cursor = 0;
+    djl_sample s;
+    if (!PyArg_ParseTuple(args, "d", &n)) return NULL;
+    djl_eval(&self->plan, n - self->offset, &cursor, &s);
+    return Py_BuildValue("(dddddddii)", s.x, s.v, s.a, s.j, s.x_al, s.v_al, s.a_al, s.done,
+                         s.segment);
+}
+
+static PyObject *plan_get_motion_time(PlanObject *self, void *c)
+{
+    (void)c;
+    return PyFloat_FromDouble(djl_motion_time(&self->plan));
+}
+
+static PyObject *plan_get_N_F(PlanObject *self, void *c)
+{
+    (void)c;
+    return Py_BuildValue("(iiii)", self->plan.N[0], self->plan.N[1], self->plan.N[2],
+                         self->plan.N[3]);
+}
+
+#define PLAN_DOUBLE_GETTER(name, expr)                                                       \
+    static PyObject *plan_get_##name(PlanObject *self, void *c)                              \
+    {                                                                                        \
+        (void)c;                                                                             \
+        return PyFloat_FromDouble(expr);                                                     \
+    }
+PLAN_DOUBLE_GETTER(v_reached, self->plan.v_reached)
+PLAN_DOUBLE_GETTER(a_reached, self->plan.a_reached)
+PLAN_DOUBLE_GETTER(d_reached, self->plan.d_reached)
+PLAN_DOUBLE_GETTER(x_target, self->plan.x_target)
+PLAN_DOUBLE_GETTER(offset, self->offset)
+PLAN_DOUBLE_GETTER(Te, self->plan.p.Te)
+PLAN_DOUBLE_GETTER(t_start, self->t_start)
+PLAN_DOUBLE_GETTER(start_time, self->start_time)
+
+static PyObject *plan_get_k_end(PlanObject *self, void *c)
+{
+    (void)c;
+    return PyLong_FromLongLong((long long)self->plan.k_end);
+}
+
+static PyObject *plan_get_shifted(PlanObject *self, void *c)
+{
+    (void)c;
+    return PyBool_FromLong(self->shifted);
+}
+
+static PyGetSetDef plan_getset[] = {
+    {"motion_time", (getter)plan_get_motion_time, NULL,
+     "Duration of the motion, filters included (s).", NULL},
+    {"N_F", (getter)plan_get_N_F, NULL, "Jerk times applied, in samples (N_F1..N_F4).", NULL},
+    {"v_reached", (getter)plan_get_v_reached, NULL, "Largest peak velocity (m/s).", NULL},
+    {"a_reached", (getter)plan_get_a_reached, NULL, "Largest acceleration level (m/s2).", NULL},
+    {"d_reached", (getter)plan_get_d_reached, NULL, "Largest deceleration level (m/s2).", NULL},
+    {"x_target", (getter)plan_get_x_target, NULL, "Final position (m).", NULL},
+    {"offset", (getter)plan_get_offset, NULL,
+     "FMU sample (counted from start_time) at which the motion starts.", NULL},
+    {"Te", (getter)plan_get_Te, NULL, "Sampling period (s).", NULL},
+    {"t_start", (getter)plan_get_t_start, NULL, "Requested start of the motion (s).", NULL},
+    {"start_time", (getter)plan_get_start_time, NULL, "Start of the sample grid (s).", NULL},
+    {"k_end", (getter)plan_get_k_end, NULL, "Samples from the motion start to its end.", NULL},
+    {"shifted", (getter)plan_get_shifted, NULL,
+     "t_start was not on the sample grid: the motion starts at the next sample.", NULL},
+    {NULL, NULL, NULL, NULL, NULL},
+};
+
+static PyMethodDef plan_methods[] = {
+    {"sample_into", (PyCFunction)plan_sample_into, METH_VARARGS,
+     "sample_into(out, n0, step, count): out[i, k] = variable i (x, v, a, j, x_AL, v_AL, a_AL) "
+     "at FMU sample n0 + k*step (out: float64 array of shape (7, count))."},
+    {"at", (PyCFunction)plan_at, METH_VARARGS,
+     "at(n): (x, v, a, j, x_AL, v_AL, a_AL, done, segment) at FMU sample n (fractional allowed)."},
+    {NULL, NULL, 0, NULL},
+};
+
+static PyTypeObject PlanType = {
+    PyVarObject_HEAD_INIT(NULL, 0)
+    .tp_name = "harness._engine.Plan",
+    .tp_basicsize = sizeof(PlanObject),
+    .tp_flags = Py_TPFLAGS_DEFAULT,
+    .tp_doc = "A move planned by the generator core (create it with plan()).",
+    .tp_methods = plan_methods,
+    .tp_getset = plan_getset,
+};
+
+/* ------------------------------------------------------- Z synchronisation */
+
+typedef struct {
+    djl_params p;
+    double t_start, start_time;
+    djl_plan plan; /* scratch: large, kept off the stack */
+} sync_ctx;
+
+static djl_status time_at(sync_ctx *c, double v, double *T, djl_error *err)
+{
+    double off;
+    int shifted;
+    djl_status st;
+    c->p.v_max = v;
+    st = plan_into(&c->p, c->t_start, c->start_time, &c->plan, err, &off, &shifted);
+    if (st == DJL_OK) *T = djl_motion_time(&c->plan);
+    return st;
+}
+
+/* sync_velocity(params, target_time, v_cap, start_time=0) -> (v_max, motion_time, synced)
+ * The same bisection as harness.planner.sync_z_velocity. */
+static PyObject *engine_sync_velocity(PyObject *self, PyObject *args, PyObject *kwds)
+{
+    static char *kwlist[] = {"params", "target_time", "v_cap", "start_time", NULL};
+    PyObject *dict;
+    double target, v_cap, start_time = 0.0, d, lo, hi, mid, T = 0.0, t_cap = 0.0;
+    djl_error err;
+    djl_status st = DJL_OK;
+    sync_ctx *c;
+    int i, synced = 1;
+    double v_out = 0.0, t_out = 0.0;
+    (void)self;
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "Odd|d", kwlist, &dict, &target, &v_cap,
+                                     &start_time))
+        return NULL;
+    c = (sync_ctx *)PyMem_Malloc(sizeof *c);
+    if (!c) return PyErr_NoMemory();
+    if (parse_params(dict, &c->p, &c->t_start) < 0) {
+        PyMem_Free(c);
+        return NULL;
+    }
+    c->start_time = start_time;
+    memset(&err, 0, sizeof err);
+    d = fabs(c->p.distance);
+    Py_BEGIN_ALLOW_THREADS
+    st = time_at(c, v_cap, &t_cap, &err);
+    if (st == DJL_OK) {
+        if (t_cap > target) {
+            v_out = v_cap;
+            t_out = t_cap;
+            synced = 0;
+        } else {
+            lo = d / target < v_cap ? d / target : v_cap;
+            st = time_at(c, lo, &T, &err);
+            if (st == DJL_OK && T <= target) {
+                v_out = lo;
+                t_out = T;
+            } else if (st == DJL_OK) {
+                hi = v_cap;
+                for (i = 0; i < 60; i++) {
+                    mid = 0.5 * (lo + hi);
+                    st = time_at(c, mid, &T, &err);
+                    if (st != DJL_OK) break;
+                    if (T <= target)
+                        hi = mid;
+                    else
+                        lo = mid;
+                    if (hi - lo <= 1e-9 * hi) break;
+                }
+                if (st == DJL_OK) st = time_at(c, hi, &T, &err);
+                v_out = hi;
+                t_out = T;
+            }
+        }
+    }
+    Py_END_ALLOW_THREADS
+    PyMem_Free(c);
+    if (st != DJL_OK) return raise_plan_error(&err, st);
+    return Py_BuildValue("(ddO)", v_out, t_out, synced ? Py_True : Py_False);
+}
+
+/* ------------------------------------------------------------ the plant */
+
+/* step_modes(a, j, h, f, zeta, gain, n, state, eps, states)
+ *   a, j: n values (acceleration at the start of each step, jerk over it);
+ *   f: (n_modes, n) frequencies (Hz) per step; zeta, gain: n_modes values;
+ *   state: 2 n_modes values (eps_i, deps_i), initial state, updated in place;
+ *   eps: n + 1 outputs (total deflection at each point, eps[0] from state);
+ *   states: (n + 1, 2 n_modes) outputs. */
+static PyObject *engine_step_modes(PyObject *self, PyObject *args)
+{
+    PyObject *oa, *oj, *of, *oz, *og, *ost, *oe, *oss;
+    double h;
+    Py_ssize_t n, nm, k, i;
+    Py_buffer ba, bj, bf, bz, bg, bst, be, bss;
+    const double *a, *j, *f, *zeta, *gain;
+    double *st, *eps, *states;
+    const double two_pi = DJL_TWO_PI;
+    (void)self;
+    if (!PyArg_ParseTuple(args, "OOdOOOnOOO", &oa, &oj, &h, &of, &oz, &og, &n, &ost, &oe, &oss))
+        return NULL;
+    if (n < 0 || !(h > 0.0)) {
+        PyErr_SetString(PyExc_ValueError, "n must be >= 0 and h > 0");
+        return NULL;
+    }
+    if (PyObject_GetBuffer(oz, &bz, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) return NULL;
+    nm = bz.len / 8;
+    PyBuffer_Release(&bz);
+    if (nm < 1) {
+        PyErr_SetString(PyExc_ValueError, "at least one mode is needed");
+        return NULL;
+    }
+    if (get_in_buffer(oa, &ba, n, "a") < 0) return NULL;
+    if (get_in_buffer(oj, &bj, n, "j") < 0) goto fail_a;
+    if (get_in_buffer(of, &bf, nm * n, "f") < 0) goto fail_j;
+    if (get_in_buffer(oz, &bz, nm, "zeta") < 0) goto fail_f;
+    if (get_in_buffer(og, &bg, nm, "gain") < 0) goto fail_z;
+    if (get_out_buffer(ost, &bst, 2 * nm, "state") < 0) goto fail_g;
+    if (get_out_buffer(oe, &be, n + 1, "eps") < 0) goto fail_st;
+    if (get_out_buffer(oss, &bss, (n + 1) * 2 * nm, "states") < 0) goto fail_e;
+    a = ba.buf;
+    j = bj.buf;
+    f = bf.buf;
+    zeta = bz.buf;
+    gain = bg.buf;
+    st = bst.buf;
+    eps = be.buf;
+    states = bss.buf;
+    for (i = 0; i < nm; i++) {
+        if (!(zeta[i] >= 0.0 && zeta[i] < 1.0)) {
+            PyErr_Format(PyExc_ValueError, "mode %zd: damping ratio %g not in [0, 1)", i, zeta[i]);
+            goto fail_all;
+        }
+    }
+    for (k = 0; k < nm * n; k++) {
+        if (!(f[k] > 0.0) || !isfinite(f[k])) {
+            PyErr_Format(PyExc_ValueError, "mode %zd: frequency %g Hz at step %zd is not a finite "
+                         "number > 0", k / (n ? n : 1), f[k], k % (n ? n : 1));
+            goto fail_all;
+        }
+    }
+    Py_BEGIN_ALLOW_THREADS
+    {
+        double total = 0.0;
+        for (i = 0; i < nm; i++) {
+            states[2 * i] = st[2 * i];
+            states[2 * i + 1] = st[2 * i + 1];
+            total += st[2 * i];
+        }
+        eps[0] = total;
+    }
+    for (k = 0; k < n; k++) {
+        double total = 0.0;
+        for (i = 0; i < nm; i++) {
+            /* harness.plant.step_mode_jerk, operation for operation */
+            double omega = two_pi * f[i * n + k];
+            double z = zeta[i], g = gain[i];
+            double sig = z * omega;
+            double w2 = omega * omega;
+            double wd = omega * sqrt(1.0 - z * z);
+            double e = exp(-sig * h);
+            double c = cos(wd * h);
+            double s = sin(wd * h) / wd;
+            double beta = -g * j[k] / w2;
+            double alpha = (-g * a[k] - 2.0 * sig * beta) / w2;
+            double d1 = st[2 * i] - alpha;
+            double d2 = st[2 * i + 1] - beta;
+            double e1 = alpha + beta * h + e * ((c + sig * s) * d1 + s * d2);
+            double e2 = beta + e * (-w2 * s * d1 + (c - sig * s) * d2);
+            st[2 * i] = e1;
+            st[2 * i + 1] = e2;
+            states[(k + 1) * 2 * nm + 2 * i] = e1;
+            states[(k + 1) * 2 * nm + 2 * i + 1] = e2;
+            total += e1;
+        }
+        eps[k + 1] = total;
+    }
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&bss);
+    PyBuffer_Release(&be);
+    PyBuffer_Release(&bst);
+    PyBuffer_Release(&bg);
+    PyBuffer_Release(&bz);
+    PyBuffer_Release(&bf);
+    PyBuffer_Release(&bj);
+    PyBuffer_Release(&ba);
+    Py_RETURN_NONE;
+fail_all:
+    PyBuffer_Release(&bss);
+fail_e:
+    PyBuffer_Release(&be);
+fail_st:
+    PyBuffer_Release(&bst);
+fail_g:
+    PyBuffer_Release(&bg);
+fail_z:
+    PyBuffer_Release(&bz);
+fail_f:
+    PyBuffer_Release(&bf);
+fail_j:
+    PyBuffer_Release(&bj);
+fail_a:
+    PyBuffer_Release(&ba);
+    return NULL;
+}
+
+/* ---------------------------------------------------------------- module */
+
+static PyMethodDef engine_methods[] = {
+    {"plan", (PyCFunction)(void (*)(void))engine_plan, METH_VARARGS | METH_KEYWORDS,
+     "plan(params, start_time=0.0) -> Plan: plan a move with the generator core; params are FMU "
+     "parameter names (the rest at the FMU's start values). Raises PlanError as the FMU refuses."},
+    {"sync_velocity", (PyCFunction)(void (*)(void))engine_sync_velocity,
+     METH_VARARGS | METH_KEYWORDS,
+     "sync_velocity(params, target_time, v_cap, start_time=0.0) -> (v_max, motion_time, synced):"
+     " the smallest v_max whose motion lasts at most target_time (bisection)."},
+    {"step_modes", engine_step_modes, METH_VARARGS,
+     "step_modes(a, j, h, f, zeta, gain, n, state, eps, states): advance the modes exactly over "
+     "n steps of h with the input a[k] + j[k] tau and the frequencies f[mode, k] (Hz)."},
+    {NULL, NULL, 0, NULL},
+};
+
+static struct PyModuleDef engine_module = {
+    PyModuleDef_HEAD_INIT, "_engine",
+    "Compiled evaluation path of the harness: the FMU's generator core and the plant.", -1,
+    engine_methods, NULL, NULL, NULL, NULL,
+};
+
+PyMODINIT_FUNC PyInit__engine(void)
+{
+    PyObject *m;
+    if (PyType_Ready(&PlanType) < 0) return NULL;
+    m = PyModule_Create(&engine_module);
+    if (!m) return NULL;
+    PlanError = PyErr_NewExceptionWithDoc(
+        "harness._engine.PlanError",
+        "The generator refused the parameters (the message is the FMU's). Attributes: status, "
+        "param, value.", PyExc_ValueError, NULL);
+    if (!PlanError || PyModule_AddObject(m, "PlanError", PlanError) < 0) {
+        Py_XDECREF(PlanError);
+        Py_DECREF(m);
+        return NULL;
+    }
+    Py_INCREF(&PlanType);
+    if (PyModule_AddObject(m, "Plan", (PyObject *)&PlanType) < 0) {
+        Py_DECREF(&PlanType);
+        Py_DECREF(m);
+        return NULL;
+    }
+    if (PyModule_AddIntConstant(m, "N_SAMPLE_VARS", N_SAMPLE_VARS) < 0 ||
+        PyModule_AddIntConstant(m, "MAX_SEGMENTS", DJL_MAX_SEGMENTS) < 0) {
+        Py_DECREF(m);
+        return NULL;
+    }
+    return m;
+}
