@@ -43,8 +43,8 @@ import numpy as np
 
 from . import _engine
 from .fmu import spec
-from .plant import Mode, ScheduledMode
 from .planner import MoveSamples
+from .plant import Mode, ScheduledMode
 
 __all__ = ["FastAxis", "PlanError", "cosimulate_fast", "map_error_residuals"]
 
@@ -123,9 +123,10 @@ class FastAxis:
 
     def sync_velocity(self, params: Mapping[str, Any], target_time: float, v_cap: float,
                       start_time: float = 0.0) -> tuple[float, float, bool]:
-        """Velocity limit making the move last ``target_time`` (see :func:`~harness.planner.sync_z_velocity`).
+        """Velocity limit making the move last ``target_time``.
 
-        The axis is left planned with the result, as the FMU's is.
+        The bisection of :func:`~harness.planner.sync_z_velocity`, compiled; the
+        axis is left planned with the result, as the FMU's is.
         """
         try:
             v, T, ok = _engine.sync_velocity(dict(params), float(target_time), float(v_cap),
@@ -138,7 +139,10 @@ class FastAxis:
     # ------------------------------------------------------------ sampling
 
     def samples(self, n0: int, step: int, count: int) -> np.ndarray:
-        """Outputs at the FMU samples n0 + k·step, k < count: rows x, v, a, j, x_AL, v_AL, a_AL."""
+        """Return the outputs at the FMU samples n0 + k·step, k < count.
+
+        Rows: x, v, a, j, x_AL, v_AL, a_AL (shape (7, count)).
+        """
         out = np.empty((_engine.N_SAMPLE_VARS, count))
         self.planned.sample_into(out, int(n0), int(step), int(count))
         return out
@@ -168,7 +172,7 @@ class FastAxis:
 
 
 def _grid(axis: FastAxis, h: float) -> int:
-    """Samples per communication step (checks that ``h`` is a whole multiple of Te)."""
+    """Return the samples per communication step (``h`` must be a whole multiple of Te)."""
     Te = axis.planned.Te
     r = h / Te
     m = round(r)
@@ -216,7 +220,7 @@ def cosimulate_fast(
     *,
     profile: str = "",
 ):
-    """The co-simulation of :func:`harness.cosim.cosimulate`, compiled (same result).
+    """Run the co-simulation of :func:`harness.cosim.cosimulate`, compiled (same result).
 
     Parameters and result as :func:`harness.cosim.cosimulate`, with
     :class:`FastAxis` instances in place of the FMUs.

@@ -30,22 +30,35 @@ def short(name: str, t_after: float = 1.0, **sim):
 def ivp_deflection(run, spec: ModeSpec, t_stop: float):
     """ε of the time-varying ODE with ω(t) = 2π f(z(t)), DOP853, rtol 1e-11.
 
-    q̈(t) is the linear interpolation of the samples (exact: constant jerk per sample) and
-    z(t) the cubic Hermite spline of (z, v_z) (exact: the Z reference is cubic per sample).
+    q̈(t) = a_k + j_k (t - t_k) on each sample interval: the generator's own semantics (a at
+    the sample, j over the interval that starts there), with AL's acceleration steps as
+    steps, not ramps.  The integration restarts at every sample where the jerk changes or the
+    acceleration jumps, so the solver never steps over a kink.  z(t) is the cubic Hermite
+    spline of (z, v_z) (exact: the Z reference is cubic per sample).
     """
     t = run.t
+    h = float(t[1] - t[0])
     zs = CubicHermiteSpline(t, run.z, run.v_z)
 
-    def rhs(tt, y):
-        w = 2 * math.pi * spec.f(float(zs(tt)))
-        return [y[1], -2 * spec.zeta * w * y[1] - w * w * y[0] - np.interp(tt, t, run.a)]
-
-    kinks = t[np.flatnonzero(np.diff(run.j) != 0) + 1]
+    # kinks: the jerk changes, or the acceleration is not continuous (AL's steps)
+    jumps = np.abs(run.a[1:] - (run.a[:-1] + run.j[:-1] * h)) > 1e-9 * max(1.0, np.max(
+        np.abs(run.a)))
+    kinks = t[np.flatnonzero((np.diff(run.j) != 0) | jumps) + 1]
     edges = sorted({0.0, t_stop, *[k for k in kinks.tolist() if k < t_stop]})
     y = np.zeros(2)
     out = {}
     for lo, hi in zip(edges[:-1], edges[1:], strict=True):
-        sol = solve_ivp(rhs, (lo, hi), y, method="DOP853", rtol=1e-11, atol=1e-15,
+        k0, k1 = int(round(lo / h)), int(round(hi / h)) - 1
+
+        def rhs_piece(tt, y, k0=k0, k1=k1):
+            # inside (lo, hi) the input is one polynomial per sample; take the sample of tt but
+            # never the one after hi (the solver may probe hi exactly)
+            k = min(max(int(math.floor(tt / h + 1e-9)), k0), k1)
+            w = 2 * math.pi * spec.f(float(zs(tt)))
+            return [y[1], -2 * spec.zeta * w * y[1] - w * w * y[0]
+                    - (run.a[k] + run.j[k] * (tt - t[k]))]
+
+        sol = solve_ivp(rhs_piece, (lo, hi), y, method="DOP853", rtol=1e-11, atol=1e-15,
                         max_step=0.01, dense_output=True)
         y = sol.y[:, -1]
         sel = (t >= lo) & (t <= hi)

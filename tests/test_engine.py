@@ -1,0 +1,307 @@
+"""The fast engine (harness._engine + harness.engine) against the FMU engine and the Python plant.
+
+The fast engine must be the same computation as the reference one, not an
+approximation of it: the generator outputs equal the FMU's, its refusals carry
+the FMU's messages, the Z synchronisation and the plant equal their Python
+counterparts, and every move of both embedded sweeps gives the same jerk times
+and metrics through both engines (1e-9 relative).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import shutil
+import subprocess
+import sys
+import sysconfig
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from test_generator_invariants import multi_moves, single_moves
+
+from harness import _engine
+from harness._resources import fmu_src_dir
+from harness.cosim import Session
+from harness.engine import FastAxis, PlanError, cosimulate_fast, map_error_residuals
+from harness.fmu.runner import FMUError, GeneratorFMU
+from harness.planner import AxisFMU, sync_z_velocity
+from harness.plant import step_mode_jerk
+from harness.scenario import load_scenario
+
+REAL = ("x", "v", "a", "j", "x_AL", "v_AL", "a_AL")
+
+
+def _n(default: int) -> int:
+    return default * 10 if os.environ.get("HYPOTHESIS_PROFILE") == "thorough" else default
+
+
+def _fmu_samples(fmu, p, count, step=1, start_time=0.0):
+    with GeneratorFMU(fmu, params=p, start_time=start_time) as g:
+        g.initialize()
+        _, vals = g.record(count - 1, p.get("Te", 1e-3) * step, REAL)
+        calc = {k: g.get(k) for k in ("motion_time", "v_reached", "a_reached", "d_reached")}
+        calc["N_F"] = tuple(int(g.get(f"N_F{i}")) for i in range(1, 5))
+    return np.vstack([vals[k] for k in REAL]), calc
+
+
+def _count(p, step=1):
+    ax = FastAxis()
+    T = ax.plan(p)
+    n = int(math.ceil((T + p.get("t_start", 0.0)) / p.get("Te", 1e-3))) + 5
+    return max(2, min(n // step + 2, 4000))
+
+
+@settings(max_examples=_n(40), deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(single_moves(), st.sampled_from([1, 3]))
+def test_samples_equal_the_fmu_outputs(fmu2, p, step):
+    """Same planner, same evaluator, same time grid: the outputs are the FMU's, bit for bit."""
+    count = _count(p, step)
+    ref, calc = _fmu_samples(fmu2, p, count, step)
+    ax = FastAxis()
+    T = ax.plan(p)
+    got = ax.samples(0, step, count)
+    assert np.array_equal(got, ref)
+    assert T == calc["motion_time"]
+    assert ax.N_F() == calc["N_F"]
+    for k in ("v_reached", "a_reached", "d_reached"):
+        assert ax.get(k) == calc[k]
+
+
+@settings(max_examples=_n(10), deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(multi_moves())
+def test_multi_segment_samples_equal_the_fmu_outputs(fmu3, p):
+    count = _count(p)
+    ref, calc = _fmu_samples(fmu3, p, count)
+    ax = FastAxis()
+    assert ax.plan(p) == calc["motion_time"]
+    assert np.array_equal(ax.samples(0, 1, count), ref)
+
+
+def test_start_time_and_off_grid_t_start_follow_the_fmu(fmu2):
+    p = {"profile": 2, "distance": 0.2, "T_F1": 0.03, "t_start": 0.12345}
+    ref, _ = _fmu_samples(fmu2, p, 600, start_time=0.01)
+    ax = FastAxis()
+    ax.plan(p, start_time=0.01)
+    assert ax.planned.shifted  # 0.12345 is not on the grid 0.01 + k ms: next sample
+    assert ax.motion_start() == pytest.approx(0.124)
+    assert np.array_equal(ax.samples(0, 1, 600), ref)
+
+
+@pytest.mark.parametrize("params, name", [
+    ({"Te": -1.0}, "Te"), ({"v_max": 0.0}, "v_max"), ({"T_F3": float("nan")}, "T_F3"),
+    ({"profile": 7}, "profile"), ({"n_segments": 40}, "n_segments"),
+    ({"distance": 1e-3, "v0": 5.0, "v_e": 5.0, "v_max": 5.0}, None),
+])
+def test_refusals_carry_the_fmus_message(fmu2, params, name):
+    with pytest.raises(FMUError) as ref:
+        with GeneratorFMU(fmu2, params=params) as g:
+            g.initialize()
+    with pytest.raises(PlanError) as got:
+        FastAxis(name="X").plan(params)
+    assert isinstance(got.value, ValueError)
+    msg = str(got.value)
+    assert msg.startswith("X: ")
+    # the FMU logs "<function>: <status>: <message>"; the engine raises the message itself
+    assert msg[3:] in str(ref.value)
+    if name is not None:
+        assert name in msg
+
+
+@pytest.mark.parametrize("params, exc, text", [
+    ({"bogus": 1.0}, KeyError, "bogus"),
+    ({"v_max": "fast"}, TypeError, "v_max"),
+    ({"profile": 2.5}, ValueError, "profile"),
+    ({"profile": True}, TypeError, "profile"),
+    ({"seg_distance": [0.1] * 33}, ValueError, "seg_distance"),
+    ({"seg_distance": 3}, TypeError, "seg_distance"),
+    ({"profile": 10**30}, ValueError, "profile"),
+])
+def test_bad_parameter_values_are_named(params, exc, text):
+    with pytest.raises(exc, match=text):
+        _engine.plan(params)
+    assert FastAxis().plan({"distance": 0.1}) > 0  # nothing else broke
+
+
+def test_sample_into_checks_its_buffer():
+    pl = _engine.plan({"distance": 0.1})
+    with pytest.raises(ValueError, match="float64"):
+        pl.sample_into(np.empty((7, 5)), 0, 1, 6)
+    with pytest.raises(ValueError, match="float64"):
+        pl.sample_into(np.empty((7, 5), dtype=np.float32), 0, 1, 5)
+    with pytest.raises(BufferError):
+        pl.sample_into(b"x" * 280, 0, 1, 5)
+    with pytest.raises(ValueError, match="step"):
+        pl.sample_into(np.empty((7, 5)), 0, 0, 5)
+
+
+@pytest.mark.parametrize("dz, v_cap, target", [(0.45, 2.0, 1.058), (0.1, 2.0, 0.5),
+                                                (0.5, 0.3, 1.0), (0.3, 2.0, 0.2)])
+def test_z_synchronisation_equals_the_python_bisection(fmu2, dz, v_cap, target):
+    base = {"profile": 2, "distance": dz, "a_max": 8.0, "d_max": 8.0, "T_F1": 0.04,
+            "T_F2": 0.04, "T_F3": 0.04, "T_F4": 0.04, "short_stage": 2}
+    with AxisFMU(fmu2) as ax:
+        ref = sync_z_velocity(ax, base, target, v_cap)
+    got = sync_z_velocity(FastAxis(), base, target, v_cap)
+    assert got == ref
+
+
+def test_step_modes_equals_the_python_step():
+    rng = np.random.default_rng(3)
+    n, h = 300, 1e-3
+    a = rng.normal(size=n + 1)
+    j = rng.normal(size=n + 1) * 100
+    f = np.vstack([6 + rng.random(n), 20 + rng.random(n)])
+    zeta, gain = np.array([0.03, 0.0]), np.array([1.0, 0.4])
+    state = np.array([1e-4, -2e-3, 0.0, 1e-3])
+    eps, states = np.empty(n + 1), np.empty((n + 1, 4))
+    _engine.step_modes(a, j, h, f, zeta, gain, n, state.copy(), eps, states)
+    st_ = [1e-4, -2e-3, 0.0, 1e-3]
+    for k in range(n):
+        for i in range(2):
+            st_[2 * i], st_[2 * i + 1] = step_mode_jerk(st_[2 * i], st_[2 * i + 1],
+                                                        2 * math.pi * f[i, k], zeta[i], gain[i],
+                                                        h, a[k], j[k])
+        assert states[k + 1].tolist() == st_
+        assert eps[k + 1] == st_[0] + st_[2]
+
+
+@pytest.mark.parametrize("bad, text", [("f", "frequency"), ("zeta", "damping"),
+                                       ("short", "at least")])
+def test_step_modes_refuses_bad_inputs(bad, text):
+    n = 10
+    a, j = np.zeros(n + 1), np.zeros(n + 1)
+    f, zeta = np.full((1, n), 5.0), np.array([0.02])
+    if bad == "f":
+        f[0, 4] = -1.0
+    elif bad == "zeta":
+        zeta[0] = 1.0
+    else:
+        a = np.zeros(3)
+    with pytest.raises(ValueError, match=text):
+        _engine.step_modes(a, j, 1e-3, f, zeta, np.ones(1), n, np.zeros(2), np.empty(n + 1),
+                           np.empty((n + 1, 2)))
+
+
+def test_map_error_residuals_equal_runs_on_the_scaled_map():
+    sc = load_scenario("X")
+    with Session(engine="fast") as s:
+        tun = s.tune(sc, "DJL")
+        params = s.move_params(sc, "DJL", tun.T_F)
+        T = s.axis.plan(params)
+        v, _ = s.z_velocity(sc, T)
+        zp = s.z_move_params(sc, v)
+        errors = [-0.1, 0.0, 0.05]
+        got = map_error_residuals(s.axis, s.z_axis, params, zp, sc.modemap.scheduled(),
+                                  [1 + e for e in errors])
+        for e, r in zip(errors, got, strict=True):
+            scaled = dataclasses.replace(sc, modemap=sc.modemap.scaled(1 + e))
+            run = s.run(scaled, "DJL", tun.T_F)
+            assert r == pytest.approx(run.free_amplitude, rel=1e-12)
+    assert got[1] < got[0]  # the nominal map is the tuned one
+
+
+@pytest.mark.parametrize("name", ["X", "Y"])
+@pytest.mark.parametrize("profile", ["AL", "JL", "DJL"])
+def test_scenario_runs_equal_through_both_engines(fmu2, name, profile):
+    sc = load_scenario(name)
+    with Session(fmu2) as ref, Session(engine="fast") as fast:
+        tr, tf = ref.tune(sc, profile), fast.tune(sc, profile)
+        assert (tr is None) == (tf is None)
+        T_F = tr.T_F if tr else None
+        if tr:
+            assert tf.T_F == tr.T_F and tf.history == tr.history
+        a, b = ref.run(sc, profile, T_F), fast.run(sc, profile, T_F)
+    assert a.engine == "fmu" and b.engine == "fast"
+    for k in ("t", "x", "v", "a", "j", "z", "v_z", "eps", "f"):
+        np.testing.assert_allclose(getattr(b, k), getattr(a, k), rtol=1e-12, atol=1e-15,
+                                   err_msg=k)
+    assert b.plan_info == a.plan_info
+    assert b.free_amplitude == pytest.approx(a.free_amplitude, rel=1e-12)
+    assert b.final_state == pytest.approx(a.final_state, rel=1e-12, abs=1e-18)
+
+
+def test_cosimulate_fast_refuses_a_step_off_the_grid():
+    ax, az = FastAxis(), FastAxis()
+    with pytest.raises(ValueError, match="whole multiple"):
+        cosimulate_fast(ax, az, {"distance": 0.1}, {"distance": 0.0}, [], 1.0, 1.5e-3)
+
+
+def test_engine_source_is_clean_under_strict_c99(tmp_path):
+    """harness/_engine.c compiles under -std=c99 -Wall -Wextra -Wpedantic -Werror."""
+    if shutil.which("gcc") is None:
+        pytest.skip("gcc not available")
+    src = Path(__file__).resolve().parents[1] / "harness" / "_engine.c"
+    if not src.is_file():
+        pytest.skip("not a source checkout")
+    cmd = ["gcc", "-std=c99", "-O2", "-fPIC", "-shared", "-Wall", "-Wextra", "-Wpedantic",
+           "-Werror", "-fvisibility=hidden", f"-I{sysconfig.get_paths()['include']}",
+           f"-I{fmu_src_dir()}", str(src), str(fmu_src_dir() / "djl_core.c"), "-o",
+           str(tmp_path / "_engine.so"), "-lm"]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    syms = subprocess.run(["nm", "-D", "--defined-only", str(tmp_path / "_engine.so")],
+                          capture_output=True, text=True).stdout
+    exported = {line.split()[-1] for line in syms.splitlines() if " T " in line}
+    assert exported == {"PyInit__engine"}
+
+
+_ASAN_SCRIPT = """
+import numpy as np
+import _engine
+rng = np.random.default_rng(1)
+for i in range(3000):
+    p = {"profile": int(rng.integers(1, 4)), "short_stage": int(rng.integers(1, 3)),
+         "distance": float(rng.normal()), "v_max": float(rng.uniform(0.01, 3)),
+         "a_max": float(rng.uniform(0.1, 20)), "d_max": float(rng.uniform(0.1, 20)),
+         "T_F1": float(rng.uniform(0, 0.3)), "T_F2": float(rng.uniform(0, 0.3)),
+         "T_F3": float(rng.uniform(0, 0.3)), "T_F4": float(rng.uniform(0, 0.3)),
+         "v0": float(rng.normal()) * 0.1, "t_start": float(rng.uniform(-0.01, 0.1))}
+    try:
+        pl = _engine.plan(p)
+    except (_engine.PlanError, ValueError):
+        continue
+    n = min(int(pl.k_end) + 20, 3000)
+    out = np.empty((7, n))
+    pl.sample_into(out, -5, 1, n)
+    try:
+        _engine.sync_velocity({**p, "v0": 0.0}, pl.motion_time * 1.5, 3.0)
+    except _engine.PlanError:
+        pass
+    eps, states = np.empty(n + 1), np.empty((n + 1, 2))
+    _engine.step_modes(np.append(out[2], 0.0), np.append(out[3], 0.0), 1e-3,
+                       np.full((1, n), 7.0), np.array([0.03]), np.ones(1), n, np.zeros(2),
+                       eps, states)
+print("ok")
+"""
+
+
+@pytest.mark.slow
+def test_engine_under_asan_and_ubsan(tmp_path):
+    """The extension, built with AddressSanitizer + UBSan, on 3000 random (also invalid) plans."""
+    if shutil.which("gcc") is None:
+        pytest.skip("gcc not available")
+    libasan = subprocess.run(["gcc", "-print-file-name=libasan.so"], capture_output=True,
+                             text=True).stdout.strip()
+    src = Path(__file__).resolve().parents[1] / "harness" / "_engine.c"
+    if not (src.is_file() and Path(libasan).is_file()):
+        pytest.skip("not a source checkout, or gcc has no AddressSanitizer runtime")
+    pkg = tmp_path  # the module alone (top-level _engine): no package, no matplotlib
+    ext = sysconfig.get_config_var("EXT_SUFFIX")
+    cmd = ["gcc", "-std=c99", "-g", "-O1", "-fPIC", "-shared", "-fsanitize=address,undefined",
+           "-fno-sanitize-recover=all", "-fno-omit-frame-pointer",
+           f"-I{sysconfig.get_paths()['include']}", f"-I{fmu_src_dir()}", str(src),
+           str(fmu_src_dir() / "djl_core.c"), "-o", str(pkg / f"_engine{ext}"), "-lm"]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    env = {**os.environ, "LD_PRELOAD": libasan, "PYTHONPATH": str(tmp_path),
+           "ASAN_OPTIONS": "detect_leaks=0:abort_on_error=0",
+           "UBSAN_OPTIONS": "print_stacktrace=1"}
+    proc = subprocess.run([sys.executable, "-c", _ASAN_SCRIPT], capture_output=True, text=True,
+                          env=env, timeout=600, cwd=tmp_path)
+    assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stdout + proc.stderr
+    assert "runtime error" not in proc.stderr, proc.stderr
