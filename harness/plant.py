@@ -55,10 +55,12 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import control as ct
 import numpy as np
-from scipy.signal import lfilter
+
+if TYPE_CHECKING:  # python-control and scipy.signal take ~1.5 s to import: loaded on use
+    import control as ct
 
 __all__ = [
     "Mode",
@@ -137,6 +139,8 @@ def mode_ss(mode: Mode) -> ct.StateSpace:
     control.StateSpace
         Continuous-time, named signals ``qdd`` → ``eps``.
     """
+    import control as ct
+
     w = mode.omega
     A = [[0.0, 1.0], [-w * w, -2.0 * mode.zeta * w]]
     B = [[0.0], [-mode.gain]]
@@ -156,6 +160,8 @@ def axis_ss(modes: Sequence[Mode]) -> ct.StateSpace:
     control.StateSpace
         2·len(modes) states (ε_i, ε̇_i), input ``qdd``, output ``eps``.
     """
+    import control as ct
+
     if not modes:
         raise ValueError("at least one mode is needed")
     n = len(modes)
@@ -335,6 +341,8 @@ class ModeResponse:
 
 def _lti_response(a: np.ndarray, h: float, mode: Mode, eps0: float, deps0: float):
     """Exact response for a constant mode, vectorised with lfilter."""
+    from scipy.signal import lfilter
+
     w = mode.omega
     p11, p12, p21, p22 = transition(w, mode.zeta, h)
     # x_{k+1} = Φ x_k + G0 u_k + G1 u_{k+1}: coefficients from step_mode's formula

@@ -84,6 +84,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--fmu", type=Path, default=None, metavar="PATH",
                    help="a generator FMU file with the same variables (overrides the "
                         "scenario's)")
+    p.add_argument("--engine", choices=("fmu", "fast"), default="fmu",
+                   help="fmu (default): the generator FMUs stepped through fmpy (the "
+                        "reference); fast: the same generator core and plant compiled, called "
+                        "once per move")
     p.add_argument("--no-plot", action="store_true", help="do not write the PNG figures")
     p.add_argument("-q", "--quiet", action="store_true", help="do not print the tables")
     p.set_defaults(func=run)
@@ -153,7 +157,7 @@ def _run(args: argparse.Namespace) -> int:
     try:
         for sc in tqdm(scenarios, disable=not show, desc="scenarios", leave=False):
             current = sc.name
-            results.append(compare_scenario(sc, peers=peers))
+            results.append(compare_scenario(sc, peers=peers, engine=args.engine))
         table_t = None
         if args.timeopt:
             current = "time-optimal measurement"

@@ -252,24 +252,18 @@ def cosimulate_reference(sc: Any, session: Any, motion: Motion, label: str,
         al = motion.evaluate(edges[1:], side="left")[2]
         sub[k] = [(e1 - e0, float(u0), float(u1)) for e0, e1, u0, u1 in
                   zip(edges[:-1], edges[1:], ar, al, strict=True) if e1 > e0]
-    gz = session.z_axis.g
-    getz = gz.fmu.getFloat64 if gz.fmi_version == 3 else gz.fmu.getReal
-    stepz = gz.fmu.doStep
-    vrz = gz.vr(["x", "v"])
+    Za = _z_samples(session, n, h)
     plant = ScheduledPlant(sc.modemap.scheduled())
     pstep = plant.step
     a = ref.a.tolist()
     a1 = a_end.tolist()
-    oz = list(getz(vrz))
-    Z = [oz]
+    z, vz = Za[:, 0].tolist(), Za[:, 1].tolist()
     E = [0.0]
     S = [tuple(plant.state)]
     half = 0.125 * h
     t0 = time.perf_counter()
     for k in range(n):
-        stepz(k * h, h)
-        oz1 = getz(vrz)
-        zm = 0.5 * (oz[0] + oz1[0]) + half * (oz[1] - oz1[1])
+        zm = 0.5 * (z[k] + z[k + 1]) + half * (vz[k] - vz[k + 1])
         pieces = sub.get(k)
         if pieces is None:
             e = pstep(h, a[k], a1[k], zm)
@@ -278,28 +272,53 @@ def cosimulate_reference(sc: Any, session: Any, motion: Motion, label: str,
                 e = pstep(hh, u0, u1, zm)
         E.append(e)
         S.append(tuple(plant.state))
-        Z.append(oz1)
-        oz = oz1
     wall = time.perf_counter() - t0
-    gz.time = n * h
-    Za = np.asarray(Z, dtype=float)
     Sa = np.asarray(S, dtype=float)
     nm = len(plant.modes)
     t_end = motion.t_end
     k_end = min(n, int(math.ceil(t_end / h - 1e-9)))
-    f = np.vstack([np.fromiter((md.f_of_z(zz) for zz in Za[:, 0].tolist()), float, n + 1)
-                   for md in plant.modes])
+    f = np.vstack([md.f_array(Za[:, 0]) for md in plant.modes])
     return CoSimResult(
         profile=label, t=t, x=ref.x, v=ref.v, a=ref.a, j=ref.j, z=Za[:, 0], v_z=Za[:, 1],
         eps=np.asarray(E), eps_modes=Sa[:, 0::2].T.copy(), f=f, t_start=motion.t_start,
-        t_end=t_end, z_t_end=float(gz.get("t_start")) + T_z, x0=sc.move.x0,
+        t_end=t_end, z_t_end=float(session.z_axis.get("t_start")) + T_z, x0=sc.move.x0,
         target=sc.move.x0 + sc.move.distance,
         state_end=[(float(Sa[k_end, 2 * i]), float(Sa[k_end, 2 * i + 1])) for i in range(nm)],
         modes_end=[md.at(float(Za[k_end, 0])) for md in plant.modes], N_F=(0, 0, 0, 0),
-        Te=sim.Te, step=h, z_v_max=v_z, z_synced=synced, fmi_version=gz.fmi_version,
+        Te=sim.Te, step=h, z_v_max=v_z, z_synced=synced,
+        fmi_version=session.z_axis.fmi_version, engine=getattr(session, "engine", "fmu"),
         wall_time=wall, final_state=list(plant.state),
         final_modes=[md.at(float(Za[-1, 0])) for md in plant.modes],
     )
+
+
+def _z_samples(session: Any, n: int, h: float) -> np.ndarray:
+    """Z position and velocity at the n + 1 communication points (session planned).
+
+    Engine ``"fmu"``: the Z generator FMU stepped through fmpy; ``"fast"``: the
+    same samples from the compiled engine in one call.
+    """
+    from ..fmu.runner import FMUError
+
+    if getattr(session, "engine", "fmu") == "fast":
+        ax = session.z_axis
+        m = int(round(h / ax.planned.Te))
+        return ax.samples(0, m, n + 1)[:2].T.copy()
+    gz = session.z_axis.g
+    getz = gz.fmu.getFloat64 if gz.fmi_version == 3 else gz.fmu.getReal
+    stepz = gz.fmu.doStep
+    vrz = gz.vr(["x", "v"])
+    Z = [list(getz(vrz))]
+    from fmpy.fmi1 import FMICallException
+
+    try:
+        for k in range(n):
+            stepz(k * h, h)
+            Z.append(getz(vrz))
+    except FMICallException as e:
+        raise FMUError(str(getattr(e, "function", "doStep")), int(e.status), gz.log) from None
+    gz.time = n * h
+    return np.asarray(Z, dtype=float)
 
 
 def _run_samples(run: Any, name: str) -> SampledTrajectory:
@@ -514,7 +533,7 @@ def stationary_variant(sc: Any) -> Any:
 
 
 def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str] = PEERS,
-                     errors: np.ndarray | None = None) -> PeerComparison:
+                     errors: np.ndarray | None = None, engine: str = "fmu") -> PeerComparison:
     """Run AL / JL / DJL and the peers on one (non-sweep) scenario.
 
     Parameters
@@ -522,11 +541,14 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
     scenario : Scenario, str or Path
         A scenario (or an embedded name, or a TOML file) without ``[sweep]``.
     session : harness.cosim.Session, optional
-        FMU instances to reuse.
+        Generator instances to reuse.
     peers : sequence of str
         Subset of :data:`PEERS`.
     errors : ndarray, optional
         Relative frequency errors of the robustness curves (default -40 % .. +40 %).
+    engine : {"fmu", "fast"}
+        Engine of the session made when ``session`` is not given (see
+        :class:`harness.cosim.Session`).
 
     Returns
     -------
@@ -541,7 +563,7 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
     sc = dataclasses.replace(sc, compare=dataclasses.replace(sc.compare, profiles=BASE))
     own = session is None
     if own:
-        session = Session(sc.simulation.fmu, sc.simulation.fmi_version)
+        session = Session(sc.simulation.fmu, sc.simulation.fmi_version, engine=engine)
     try:
         base = run_case(sc, session)
         band = base.band
