@@ -305,3 +305,33 @@ def test_engine_under_asan_and_ubsan(tmp_path):
                           env=env, timeout=600, cwd=tmp_path)
     assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stdout + proc.stderr
     assert "runtime error" not in proc.stderr, proc.stderr
+
+
+def _same(a: float, b: float) -> bool:
+    if math.isinf(a) or math.isinf(b) or math.isnan(a) or math.isnan(b):
+        return (math.isinf(a) and a == b) or (math.isnan(a) and math.isnan(b))
+    return abs(a - b) <= 1e-9 * max(abs(a), abs(b), 1e-300)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["sweep-X", "sweep-Y"])
+def test_every_sweep_move_is_the_same_through_both_engines(fmu2, name):
+    """Issue #8: every move of both embedded sweeps through both engines gives the same
+    jerk times and residual, settling and motion times to 1e-9 relative."""
+    from harness.evaluation import run_case
+
+    sc = load_scenario(name)
+    cases = sc.cases()
+    assert len(cases) == 50
+    with Session(fmu2) as ref, Session(engine="fast") as fast:
+        for case in cases:
+            a = run_case(case, ref, keep_runs=False)
+            b = run_case(case, fast, keep_runs=False)
+            assert a.band == pytest.approx(b.band, rel=1e-9)
+            for prof, pa in a.profiles.items():
+                pb = b.profiles[prof]
+                assert pb.T_F == pa.T_F, (case.name, prof)
+                for key in ("residual", "settling_time", "motion_time", "free_amplitude",
+                            "rise_time"):
+                    va, vb = getattr(pa.metrics, key), getattr(pb.metrics, key)
+                    assert _same(va, vb), (case.name, prof, key, va, vb)
