@@ -91,7 +91,13 @@ def run(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     from ..scenario import DEFAULT_SCENARIOS, embedded_scenarios
-    from ._common import CommandError, load_scenarios, report_written, write_outputs
+    from ._common import (
+        CommandError,
+        load_scenarios,
+        render_figures,
+        report_written,
+        write_outputs,
+    )
 
     if args.list:
         for name, desc in embedded_scenarios().items():
@@ -108,7 +114,7 @@ def _run(args: argparse.Namespace) -> int:
     matplotlib.use("Agg")
     from ..cosim import run_scenario
     from ..fmu.runner import FMUError
-    from ..results import SweepResult, format_table2, save_figure, table2_rows, write_csv
+    from ..results import SweepResult, format_table2, table2_rows, write_csv
 
     results = []
     try:
@@ -125,10 +131,12 @@ def _run(args: argparse.Namespace) -> int:
 
     # 3. write everything, or nothing
     def write(written: list[Path]) -> None:
+        figures = []
         for stem, r in zip(stems, results, strict=True):
             written.append(r.to_csv(args.out / f"{stem}.csv"))
             if not args.no_plot:
-                written.append(save_figure(r.plot(), args.out / f"{stem}.png"))
+                figures.append((r.plot, args.out / f"{stem}.png"))
+        render_figures(figures, written)
         if sweeps:
             written.append(write_csv(args.out / "table2.csv", table2_rows(sweeps)))
         if not args.scenarios and not args.no_fmus:
