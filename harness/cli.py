@@ -13,7 +13,7 @@ import sys
 
 from . import __version__
 
-COMMANDS = ("build", "demo", "simulate", "report", "compare")
+COMMANDS = ("build", "demo", "simulate", "map", "report", "compare")
 
 EPILOG = """\
 typical use:
@@ -22,6 +22,9 @@ typical use:
       ./djl-fmu-out/simulate (also writes the two FMUs there)
   djl-fmu simulate my_axis.toml
       your moves and mode map (scenario format: docs/harness.md)
+  djl-fmu map X
+      the workspace map: AL/JL/DJL over 10,000 moves on all cores (or a Dask cluster,
+      --scheduler ADDRESS); CSV and heat maps in ./djl-fmu-out/map (docs/map.md)
   djl-fmu build --fmi-version 3 -o out/JerkLimitedTrajectory.fmu
       write an FMI 3.0 co-simulation FMU (binary for this platform + C sources)
   djl-fmu report

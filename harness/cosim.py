@@ -331,7 +331,7 @@ def cosimulate(
 
 
 def plan_info(axis: Any, z_axis: Any, T_x: float, T_z: float) -> dict[str, Any]:
-    """What both generators planned (see :attr:`CoSimResult.plan_info`)."""
+    """Return what both generators planned (see :attr:`CoSimResult.plan_info`)."""
     return {
         "motion_time": T_x, "N_F": axis.N_F(),
         "v_reached": float(axis.get("v_reached")), "a_reached": float(axis.get("a_reached")),
@@ -374,6 +374,8 @@ class Session:
 
             self.axis: Any = FastAxis(name="excited_axis")
             self.z_axis: Any = FastAxis(name="z_axis")
+            # vectorised over map errors (harness.robustness uses it when present)
+            self.map_error_residuals = self._fast_map_error_residuals
             return
         self.axis = AxisFMU(fmu, fmi_version=fmi_version, name="excited_axis")
         try:
@@ -453,6 +455,23 @@ class Session:
                             rule=sc.compare.djl_rule)
         return None
 
+    def _fast_map_error_residuals(self, sc: Scenario, profile: str,
+                                  T_F: Sequence[float] | None,
+                                  factors: Sequence[float]) -> np.ndarray:
+        """Residual of one profile with every mode frequency scaled by each factor (fast).
+
+        The move and the Z synchronisation are planned once on the nominal
+        scenario (the jerk times do not change with the map), the plant is
+        stepped once per factor (:func:`harness.engine.map_error_residuals`).
+        """
+        from .engine import map_error_residuals
+
+        params = self.move_params(sc, profile, T_F)
+        T_x = self.axis.plan(params)
+        v_z, _ = self.z_velocity(sc, T_x)
+        return map_error_residuals(self.axis, self.z_axis, params, self.z_move_params(sc, v_z),
+                                   sc.modemap.scheduled(), factors, sc.simulation.step)
+
     def run(self, sc: Scenario, profile: str, T_F: Sequence[float] | None = None,
             t_stop: float | None = None) -> CoSimResult:
         """Co-simulate one profile of a scenario with the given jerk times."""
@@ -479,7 +498,8 @@ class Session:
 
 def run_scenario(scenario: Scenario | str | Path, *, fmu: str | Path | None = None,
                  fmi_version: int | None = None, progress: bool = False,
-                 session: Session | None = None, engine: str | None = None):
+                 session: Session | None = None, engine: str | None = None,
+                 robustness: bool | str | None = "auto"):
     """Run a scenario: one call from a TOML file (or embedded name) to the results.
 
     Parameters
@@ -515,17 +535,23 @@ def run_scenario(scenario: Scenario | str | Path, *, fmu: str | Path | None = No
         if engine is None:
             engine = "fast" if sc.is_sweep else "fmu"
         session = Session(sc.simulation.fmu, sc.simulation.fmi_version, engine=engine)
+    if robustness == "auto":
+        robustness = "worst" if sc.is_sweep else "curves"
+    rsession = session if session.engine == "fast" or not robustness else Session(engine="fast")
     try:
         if not sc.is_sweep:
-            return run_case(sc, session)
+            return run_case(sc, session, robustness=robustness, robustness_session=rsession)
         cases = sc.cases()
         results = []
         for case in _progress(cases, progress, desc=sc.name):
-            results.append(run_case(case, session, keep_runs=False))
+            results.append(run_case(case, session, keep_runs=False, robustness=robustness,
+                                    robustness_session=rsession))
         return SweepResult(sc, results)
     finally:
         if own:
             session.close()
+        if rsession is not session:
+            rsession.close()
 
 
 def _progress(items: list[Any], enabled: bool, desc: str):

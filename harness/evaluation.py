@@ -1,8 +1,12 @@
 """Metrics of one case: run every profile of a scenario and measure it.
 
 :func:`run_case` tunes the jerk times (through the session's engine), runs
-each profile and measures it (:func:`profile_metrics`) against the settling
-band of the case; :class:`ProfileMetrics` holds the Table 1 quantities.
+each profile and measures it (:func:`profile_metrics`) against one settling
+band shared by every profile of the case (``simulation.settle_band``, see
+:class:`harness.metrics.SettleBand`), and also against the paper's band (DJL's
+residual) when DJL runs; optionally it measures each profile's robustness to a
+map error (:mod:`harness.robustness`).  :class:`ProfileMetrics` holds the
+Table 1 quantities.
 """
 
 from __future__ import annotations
@@ -19,9 +23,16 @@ from .tuning import TuningResult
 
 if TYPE_CHECKING:
     from .cosim import CoSimResult, Session
+    from .results import ScenarioResult
     from .scenario import Scenario
 
-__all__ = ["ProfileMetrics", "profile_metrics", "run_case"]
+__all__ = ["ROBUSTNESS_MODES", "ProfileMetrics", "profile_metrics", "run_case"]
+
+ROBUSTNESS_MODES = ("worst", "curves")
+"""Values of ``run_case(..., robustness=...)`` besides False / True."""
+
+_NO_BAND = 1e-9
+"""Band used when the one asked for is zero (a residual of exactly 0): 1 nm."""
 
 
 @dataclass
@@ -31,10 +42,12 @@ class ProfileMetrics:
     Attributes
     ----------
     residual : float
-        Peak |ε| after the reference has ended (m).
+        Residual vibration (m): the amplitude of the free oscillation when the
+        reference ends, summed over the modes
+        (:func:`harness.metrics.residual_amplitude`).  Every comparison
+        (% of AL, DJL vs JL, Table 2, the paper's band) uses it.
     free_amplitude : float
-        Amplitude of the free oscillation when the reference ends (m; sum over
-        the modes).
+        The same number (m), under its former name (CSV ``free_amplitude_m``).
     motion_time : float
         Duration of the reference (s): the paper's "theoretical rise time".
     rise_time : float
@@ -43,7 +56,14 @@ class ProfileMetrics:
         From the start until the load stays within ±band of the target (s);
         ``inf`` if it never does (undamped mode).
     band : float
-        The settling band used (m).
+        The settling band used (m), the same for every profile of the case.
+    residual_peak : float
+        Peak |ε| after the motion (sampled) (m): secondary, phase-dependent.
+    settling_time_paper : float
+        Settling time (s) into the paper's band, DJL's residual (Table 2's
+        definition); NaN when DJL was not run.
+    paper_band : float
+        That band (m); NaN when DJL was not run.
     """
 
     residual: float
@@ -52,47 +72,73 @@ class ProfileMetrics:
     rise_time: float
     settling_time: float
     band: float
+    residual_peak: float = math.nan
+    settling_time_paper: float = math.nan
+    paper_band: float = math.nan
 
 
-def profile_metrics(run: CoSimResult, band: float) -> ProfileMetrics:
+def _settling(run: CoSimResult, band: float) -> float:
+    """Settling time of a run into ±band (s), the record extended analytically if needed."""
+    t, err = run.t, run.error
+    # a band made of a residual may equal a sample of |ε| (ζ = 0): a sample at the band
+    # (to rounding) counts as inside
+    band_in = band * (1.0 + 1e-9)
+    amps = [free_amplitude(run.final_state[2 * i], run.final_state[2 * i + 1], m)
+            for i, m in enumerate(run.final_modes)]
+    if sum(amps) <= band_in:
+        return settling_time(t, err, band_in, run.t_start)
+    # time for the envelope Σ A_i e^{-σ_i τ} to fall below the band
+    need = 0.0
+    nm = len(run.final_modes)
+    for Ai, m in zip(amps, run.final_modes, strict=True):
+        if Ai * nm > band_in:
+            need = max(need, math.inf if m.sigma == 0 else math.log(Ai * nm / band_in) / m.sigma)
+    if not (math.isfinite(need) and need < 3600.0):
+        return math.inf
+    te, ee = run.extend(need + run.step)
+    t = np.concatenate((t, te))
+    err = np.concatenate((err, ee + (run.x[-1] - run.target)))
+    return settling_time(t, err, band_in, run.t_start)
+
+
+def profile_metrics(run: CoSimResult, band: float, *,
+                    paper_band: float | None = None) -> ProfileMetrics:
     """Metrics of one run, the settling band given.
 
     When the load is not provably settled at the end of the record (the sum of
     the modes' free-oscillation amplitudes there exceeds the band), the record
     is continued analytically with the free response (:meth:`CoSimResult.extend`)
     until it is.
+
+    Parameters
+    ----------
+    run : CoSimResult
+        The co-simulation of one profile.
+    band : float
+        Settling band (m), > 0.
+    paper_band : float, optional
+        The paper's band (DJL's residual, m): adds ``settling_time_paper``.
+
+    Returns
+    -------
+    ProfileMetrics
     """
-    t, err = run.t, run.error
-    # the default band is a sampled value of |ε| itself: a sample at the band (to rounding)
-    # counts as inside
-    band_in = band * (1.0 + 1e-9)
-    A_final = sum(free_amplitude(run.final_state[2 * i], run.final_state[2 * i + 1], m)
-                  for i, m in enumerate(run.final_modes))
-    if A_final > band_in:
-        # time for the envelope Σ A_i e^{-σ_i τ} to fall below the band
-        need = 0.0
-        nm = len(run.final_modes)
-        for i, m in enumerate(run.final_modes):
-            Ai = free_amplitude(run.final_state[2 * i], run.final_state[2 * i + 1], m)
-            if Ai * nm > band_in:
-                need = max(need, math.inf if m.sigma == 0
-                           else math.log(Ai * nm / band_in) / m.sigma)
-        if math.isfinite(need) and need < 3600.0:
-            te, ee = run.extend(need + run.step)
-            t = np.concatenate((t, te))
-            err = np.concatenate((err, ee + (run.x[-1] - run.target)))
-            ts = settling_time(t, err, band_in, run.t_start)
-        else:
-            ts = math.inf
+    residual = run.free_amplitude
+    if paper_band is None or not math.isfinite(paper_band):
+        ts_paper, pb = math.nan, math.nan
     else:
-        ts = settling_time(t, err, band_in, run.t_start)
+        pb = float(paper_band)
+        ts_paper = _settling(run, pb)
     return ProfileMetrics(
-        residual=residual_peak(run.t, run.eps, run.t_end),
-        free_amplitude=run.free_amplitude,
+        residual=residual,
+        free_amplitude=residual,
         motion_time=run.motion_time,
         rise_time=rise_time(run.t, run.load, run.target, run.t_start, start=run.x0),
-        settling_time=ts,
+        settling_time=ts_paper if pb == band else _settling(run, band),
         band=band,
+        residual_peak=residual_peak(run.t, run.eps, run.t_end),
+        settling_time_paper=ts_paper,
+        paper_band=pb,
     )
 
 
@@ -109,7 +155,19 @@ def _jerk_times(sc: Scenario, profile: str, tuning: TuningResult | None
     return sc.compare.DJL_T_F
 
 
-def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True):
+def _robustness_mode(robustness: bool | str | None) -> str | None:
+    if robustness is None or robustness is False:
+        return None
+    if robustness is True:
+        return "curves"
+    if robustness in ROBUSTNESS_MODES:
+        return str(robustness)
+    raise ValueError(f"robustness must be False, True, 'worst' or 'curves', got {robustness!r}")
+
+
+def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True,
+             robustness: bool | str | None = False,
+             robustness_session: Session | None = None) -> ScenarioResult:
     """Tune, co-simulate and measure every profile of a single-move scenario.
 
     Parameters
@@ -120,34 +178,85 @@ def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True):
         The FMU instances to use.
     keep_runs : bool
         Keep the time series (False in sweeps, to save memory).
+    robustness : bool or {"worst", "curves"}
+        Residual of each profile when the whole mode map is off by a factor
+        1 + e (jerk times tuned on the nominal map; :mod:`harness.robustness`):
+
+        * False (default): not computed;
+        * ``"worst"``: only the worst case over e in ±10 % (21 points, 1 %
+          apart), stored on each profile as ``worst_residual_10pct``;
+        * ``"curves"`` or True: the curves over e in ±20 % (41 points, 1 %
+          apart) kept on the result as ``.robustness``
+          (:class:`harness.robustness.RobustnessResult`), and the worst case
+          over ±10 % taken from them (the same 21 points).
+    robustness_session : Session, optional
+        Session for the map-error runs (default: ``session``); e.g. the fast
+        engine's when ``session`` drives the FMUs (same results, see
+        ``tests/test_engine.py``), since they are many.
 
     Returns
     -------
     harness.results.ScenarioResult
+        With ``band`` / ``band_source`` (``simulation.settle_band``) and
+        ``paper_band`` (DJL's residual, NaN without DJL).
+
+    Raises
+    ------
+    ValueError
+        If ``robustness`` is none of the above, or if the settling band is the
+        paper's (DJL's residual) and DJL is not among the profiles.
     """
     from .results import ProfileOutcome, ScenarioResult
+    from .robustness import DEFAULT_ERRORS, WORST_ERRORS, WORST_SPAN
+    from .robustness import robustness as rob_fn
 
+    mode = _robustness_mode(robustness)
     runs: dict[str, CoSimResult] = {}
     tunings: dict[str, TuningResult | None] = {}
     for prof in sc.compare.profiles:
         tunings[prof] = session.tune(sc, prof)
         runs[prof] = session.run(sc, prof, _jerk_times(sc, prof, tunings[prof]))
-    if sc.simulation.band is not None:
-        band, source = sc.simulation.band, "given in the scenario"
-    elif "DJL" in runs:
-        band = residual_peak(runs["DJL"].t, runs["DJL"].eps, runs["DJL"].t_end)
-        source = "largest residual of DJL (the paper's band)"
+    residuals = {p: r.free_amplitude for p, r in runs.items()}
+
+    spec = sc.simulation.settle_band
+    source = spec.label
+    if spec.needs == "AL" and "AL" not in runs:
+        # the default band (a fraction of AL's residual) in a scenario that does not compare
+        # AL: AL is run for the band only (an explicit one is refused when the file is loaded)
+        al = session.run(sc, "AL", None, t_stop=_just_past_motion(sc, session, "AL", None))
+        residuals_band = {**residuals, "AL": al.free_amplitude}
+        source += " (AL run for the band only)"
     else:
-        name = min(runs, key=lambda p: residual_peak(runs[p].t, runs[p].eps, runs[p].t_end))
-        band = residual_peak(runs[name].t, runs[name].eps, runs[name].t_end)
-        source = f"largest residual of {name} (no DJL run)"
+        residuals_band = residuals
+    band = spec.resolve(residuals_band)
     if not band > 0:
-        band, source = 1e-9, source + "; zero, so 1 nm"
+        band, source = _NO_BAND, source + "; zero, so 1 nm"
+    paper_band = math.nan
+    if "DJL" in runs:
+        paper_band = residuals["DJL"] if residuals["DJL"] > 0 else _NO_BAND
+
+    jerk = {p: _jerk_times(sc, p, tunings[p]) for p in runs}
+    curves = None
+    worst: dict[str, float] = {}
+    rs = session if robustness_session is None else robustness_session
+    if mode == "curves":
+        curves = rob_fn(sc, rs, jerk, errors=DEFAULT_ERRORS)
+        worst = curves.worst(WORST_SPAN)
+    elif mode == "worst":
+        worst = rob_fn(sc, rs, jerk, errors=WORST_ERRORS).worst(WORST_SPAN)
+
     outcomes = {}
     for prof, run in runs.items():
-        met = profile_metrics(run, band)
-        outcomes[prof] = ProfileOutcome(prof, run if keep_runs else None, tunings[prof], met,
-                                        run.T_F, run.z_v_max, run.z_synced)
-    return ScenarioResult(sc, outcomes, band, source)
+        met = profile_metrics(run, band, paper_band=paper_band)
+        outcomes[prof] = ProfileOutcome(
+            prof, run if keep_runs else None, tunings[prof], met, run.T_F, run.z_v_max,
+            run.z_synced, plan_info=dict(run.plan_info),
+            worst_residual_10pct=worst.get(prof, math.nan))
+    return ScenarioResult(sc, outcomes, band, source, paper_band=paper_band, robustness=curves)
 
 
+def _just_past_motion(sc: Scenario, session: Session, profile: str,
+                      T_F: tuple[float, ...] | None) -> float:
+    from .robustness import t_stop_after_motion
+
+    return t_stop_after_motion(sc, session, profile, T_F)

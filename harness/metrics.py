@@ -2,12 +2,15 @@
 
 The quantities of Table 1 and Table 2 of Béarée & Olabi 2013 (§4):
 
-* residual vibration — peak |ε| after the reference has ended
-  (:func:`residual_peak`); the amplitude of the free oscillation at that instant
-  is :func:`harness.plant.free_amplitude`;
+* residual vibration — the amplitude of the free oscillation when the
+  reference ends, summed over the modes (:func:`residual_amplitude`, i.e.
+  :func:`harness.plant.free_amplitude` of each mode's state then); the sampled
+  peak |ε| after the end of the reference (:func:`residual_peak`) is kept as a
+  secondary, phase-dependent figure;
 * settling time — from the start of the motion until the load enters, and stays
-  in, a band around the target (:func:`settling_time`); the paper's band is the
-  largest residual vibration of the DJL profile;
+  in, a band around the target (:func:`settling_time`); the band is one for
+  every profile of a case (:class:`SettleBand`: metres, a fraction of AL's
+  residual, or the paper's band, DJL's residual);
 * motion time — the reference's duration, the paper's "theoretical rise time"
   (:func:`motion_time`);
 * rise time — from the start until the load first reaches the target
@@ -21,16 +24,25 @@ Crossing times are interpolated linearly between samples.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+import re
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+if TYPE_CHECKING:
+    from .plant import Mode
+
 __all__ = [
+    "DEFAULT_SETTLE_BAND",
+    "SettleBand",
     "Table2Stats",
     "change_percent",
     "motion_time",
+    "parse_settle_band",
     "percent_of",
+    "residual_amplitude",
     "residual_peak",
     "rise_time",
     "settling_time",
@@ -46,8 +58,41 @@ def _check(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return t, y
 
 
+def residual_amplitude(states: Iterable[tuple[float, float]], modes: Iterable[Mode]) -> float:
+    """Residual vibration: the free-oscillation amplitude when the reference ends.
+
+    Once the reference has ended (q̈ = 0), each mode oscillates freely,
+    ε(τ) = e^{-ζωτ}[ε cos ω_d τ + (ε̇ + ζωε)/ω_d sin ω_d τ]; its amplitude is
+    √(ε² + ((ε̇ + ζωε)/ω_d)²) (:func:`harness.plant.free_amplitude`).  The
+    residual vibration is the sum over the modes: for one mode, the envelope
+    of |ε| after the motion; for several, an upper bound of |Σε|.
+
+    Parameters
+    ----------
+    states : iterable of (float, float)
+        (ε, ε̇) of each mode when the reference ends (m, m/s).
+    modes : iterable of Mode
+        Each mode at that instant (its frequency then).
+
+    Returns
+    -------
+    float
+        Σ amplitudes (m).
+    """
+    from .plant import free_amplitude
+
+    return float(sum(free_amplitude(float(e), float(de), m)
+                     for (e, de), m in zip(states, modes, strict=True)))
+
+
 def residual_peak(t: np.ndarray, eps: np.ndarray, t_end: float) -> float:
-    """Largest |ε| at or after the end of the reference.
+    """Largest sampled |ε| at or after the end of the reference.
+
+    Secondary figure (the residual vibration is :func:`residual_amplitude`):
+    with light damping the first peak after ``t_end`` comes up to half a
+    period later, so this is up to e^{-πζ/√(1-ζ²)} below the free-oscillation
+    amplitude, depending on the phase of the oscillation at ``t_end``, and it
+    depends on where the samples fall.
 
     Parameters
     ----------
@@ -192,6 +237,139 @@ def percent_of(value: float, reference: float) -> float:
 def change_percent(value: float, reference: float) -> float:
     """Relative change in % (Table 2: DJL "in % as compared to JL", negative = better)."""
     return 100.0 * (value - reference) / reference if reference else math.nan
+
+
+PAPER_BAND_LABEL = "the paper's band: DJL's residual"
+"""How the paper's settling band (Table 2) is labelled wherever it is printed."""
+
+_FRACTION_OF_AL = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*%\s*of\s+AL\s*$",
+                             re.IGNORECASE)
+
+
+@dataclass(frozen=True)
+class SettleBand:
+    """The settling band of a case: one half-width shared by every profile.
+
+    Attributes
+    ----------
+    kind : {"m", "AL", "paper"}
+        ``"m"``: a fixed half-width in metres (a machine tolerance);
+        ``"AL"``: a fraction of AL's residual vibration in the same case;
+        ``"paper"``: DJL's residual vibration, the band of the paper's Table 2
+        (self-referential: DJL is inside it as soon as its motion ends).
+    value : float
+        The half-width (m) for ``"m"``, the fraction (0 < value <= 1) for
+        ``"AL"``; unused (NaN) for ``"paper"``.
+    """
+
+    kind: str
+    value: float = math.nan
+
+    def __post_init__(self) -> None:
+        if self.kind == "m":
+            if not (math.isfinite(self.value) and self.value > 0):
+                raise ValueError(f"a settling band in m must be > 0, got {self.value!r}")
+        elif self.kind == "AL":
+            if not (math.isfinite(self.value) and 0 < self.value <= 1):
+                raise ValueError(f"a fraction of AL's residual must be in (0, 100] %, "
+                                 f"got {100 * self.value!r} %")
+        elif self.kind != "paper":
+            raise ValueError(f"unknown settling band kind {self.kind!r} (m, AL or paper)")
+
+    @property
+    def needs(self) -> str | None:
+        """The profile whose residual the band is made of (``"AL"``, ``"DJL"``), or None."""
+        return {"AL": "AL", "paper": "DJL"}.get(self.kind)
+
+    def __str__(self) -> str:
+        """Return the band as written in a scenario file (``settle_band = ...``)."""
+        if self.kind == "paper":
+            return "paper"
+        if self.kind == "AL":
+            return f"{100 * self.value:g} % of AL"
+        return f"{self.value:g}"
+
+    @property
+    def label(self) -> str:
+        """Human-readable source of the band, printed with every settling time."""
+        if self.kind == "paper":
+            return PAPER_BAND_LABEL
+        if self.kind == "AL":
+            return f"band: {100 * self.value:g} % of AL's residual"
+        return f"band: +/-{self.value * 1e3:.3g} mm, given in the scenario"
+
+    def resolve(self, residuals: Mapping[str, float]) -> float:
+        """Half-width of the band (m) in one case.
+
+        Parameters
+        ----------
+        residuals : mapping of str to float
+            Residual vibration of the profiles run in the case (m), by name.
+
+        Returns
+        -------
+        float
+            The band (m).
+
+        Raises
+        ------
+        ValueError
+            If the band is made of a profile's residual and that profile is
+            missing.
+        """
+        if self.kind == "m":
+            return float(self.value)
+        need = self.needs
+        if need not in residuals:
+            raise ValueError(f"settling band '{self}' needs the residual of {need}, which was "
+                             f"not run (profiles: {', '.join(residuals)})")
+        r = float(residuals[need])  # type: ignore[index]
+        return r * self.value if self.kind == "AL" else r
+
+
+DEFAULT_SETTLE_BAND = SettleBand("AL", 0.01)
+"""Default settling band: 1 % of AL's residual vibration in the same case."""
+
+
+def parse_settle_band(value: object) -> SettleBand:
+    """Read a settling band as written in a scenario file.
+
+    Parameters
+    ----------
+    value : float or str
+        A half-width in m (a number > 0), ``"paper"`` (DJL's residual, the
+        paper's Table 2 band) or ``"P % of AL"`` / ``"P% of AL"`` (P in
+        (0, 100]: that fraction of AL's residual).
+
+    Returns
+    -------
+    SettleBand
+
+    Raises
+    ------
+    ValueError
+        With the reason, if ``value`` is none of these.
+    """
+    if isinstance(value, SettleBand):
+        return value
+    if isinstance(value, bool):
+        raise ValueError("must be a number (m), \"paper\" or \"P % of AL\"")
+    if isinstance(value, (int, float)):
+        v = float(value)
+        if not (math.isfinite(v) and v > 0):
+            raise ValueError("a settling band in m must be a finite number > 0")
+        return SettleBand("m", v)
+    if isinstance(value, str):
+        if value.strip().lower() == "paper":
+            return SettleBand("paper")
+        m = _FRACTION_OF_AL.match(value)
+        if m:
+            p = float(m.group(1))
+            if not 0 < p <= 100:
+                raise ValueError("the percentage of AL's residual must be in (0, 100]")
+            return SettleBand("AL", p / 100.0)
+    raise ValueError("must be a number (m, > 0), \"paper\" (DJL's residual: the paper's "
+                     "band) or \"P % of AL\" (P in (0, 100])")
 
 
 @dataclass

@@ -290,7 +290,7 @@ class ModeSpec:
         return f if self.scale == 1.0 else f * self.scale
 
     def scaled(self, factor: float) -> ModeSpec:
-        """The same mode with every frequency multiplied by ``factor`` (> 0).
+        """Return the same mode with every frequency multiplied by ``factor`` (> 0).
 
         A map error of e (the whole f(z) law off by 1 + e) is ``scaled(1 + e)``;
         it is carried as a load-mass ratio 1/factor², so ``f = law(z) · factor``.
@@ -358,7 +358,7 @@ class ModeMap:
         return [m.scheduled() for m in self.modes]
 
     def scaled(self, factor: float) -> ModeMap:
-        """The map with every mode's frequency multiplied by ``factor`` (a map error 1 + e)."""
+        """Return the map with every frequency multiplied by ``factor`` (a map error 1 + e)."""
         return ModeMap(tuple(m.scaled(factor) for m in self.modes), self.tune)
 
     def check_range(self, z_min: float, z_max: float) -> None:

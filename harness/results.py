@@ -4,6 +4,13 @@
 Béarée & Olabi 2013 (absolute values and % of AL); :class:`SweepResult` (the
 test set of a sweep) like Table 2 (DJL compared with JL, in %).  Both write
 CSV and return a matplotlib figure from ``.plot()``.
+
+Every settling time is printed with its band and the band's source; the
+residual vibration is the free-oscillation amplitude when the reference ends
+(:func:`harness.metrics.residual_amplitude`), the sampled peak |ε| after the
+motion being shown, labelled, beside it.  A sweep counts each distinct move
+once in its statistics (:meth:`SweepResult.duplicates`): at d = 0.1 m, JL and
+DJL never reach v_max, and v_max = 0.5 or 2 m/s plan the same JL and DJL moves.
 """
 
 from __future__ import annotations
@@ -13,13 +20,13 @@ import math
 import os
 import tempfile
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .metrics import Table2Stats, change_percent, percent_of, table2_stats
+from .metrics import PAPER_BAND_LABEL, Table2Stats, change_percent, percent_of, table2_stats
 
 __all__ = [
     "ProfileOutcome",
@@ -27,10 +34,21 @@ __all__ = [
     "SweepResult",
     "format_table2",
     "plot_runs",
+    "table2_rows",
     "write_csv",
 ]
 
 COLORS = {"AL": "0.45", "JL": "tab:blue", "DJL": "tab:red"}
+
+MOVE_KEY_FIELDS = ("N_F", "motion_time", "v_reached", "a_reached", "d_reached", "distance",
+                   "x0", "z0", "z_distance", "z_v_max")
+"""Fields of ``CoSimResult.plan_info`` that identify a planned move (compared exactly)."""
+
+PEAK_LABEL = "peak |ε| after the motion (sampled)"
+"""Label of :attr:`~harness.evaluation.ProfileMetrics.residual_peak` wherever it is shown."""
+
+WORST_LABEL = "Worst residual, map error +/-10 %"
+"""Label of the worst residual over a ±10 % map error (:mod:`harness.robustness`)."""
 
 
 @dataclass
@@ -53,6 +71,12 @@ class ProfileOutcome:
         Velocity limit of the Z move (m/s).
     z_synced : bool
         Whether the Z move ends with the excited axis.
+    plan_info : dict
+        What the generators planned (``CoSimResult.plan_info``), kept when the
+        run is dropped: identifies the move (:attr:`move_key`).
+    worst_residual_10pct : float
+        Largest residual over a map error within ±10 % (m), jerk times tuned on
+        the nominal map (:mod:`harness.robustness`); NaN if not computed.
     """
 
     name: str
@@ -62,6 +86,17 @@ class ProfileOutcome:
     T_F: tuple[float, ...]
     z_v_max: float
     z_synced: bool
+    plan_info: dict[str, Any] = field(default_factory=dict)
+    worst_residual_10pct: float = math.nan
+
+    @property
+    def move_key(self) -> tuple[Any, ...] | None:
+        """The planned move, exactly (:data:`MOVE_KEY_FIELDS`); None if unknown."""
+        info = self.plan_info or (getattr(self.run, "plan_info", None) or {})
+        if any(k not in info for k in MOVE_KEY_FIELDS):
+            return None
+        return tuple(tuple(int(n) for n in info[k]) if k == "N_F" else float(info[k])
+                     for k in MOVE_KEY_FIELDS)
 
 
 def _fmt(v: float, digits: int = 3) -> str:
@@ -146,25 +181,38 @@ class ScenarioResult:
     profiles : dict of str to ProfileOutcome
         In the scenario's order.
     band : float
-        Settling band (m).
+        Settling band (m), the same for every profile.
     band_source : str
-        Where the band comes from.
+        Where the band comes from (e.g. ``band: 1 % of AL's residual``).
+    paper_band : float
+        The paper's band, DJL's residual (m): the band of ``settling_time_paper``;
+        NaN without DJL.
+    robustness : RobustnessResult, optional
+        Residual against a map error, in the time-varying plant
+        (``run_case(..., robustness="curves")``).
     """
 
     scenario: Any
     profiles: dict[str, ProfileOutcome]
     band: float
     band_source: str
+    paper_band: float = math.nan
+    robustness: Any = None
 
     # ------------------------------------------------------------ numbers
 
     def metric(self, profile: str, name: str) -> float:
         """Return one metric of one profile.
 
-        ``name`` is ``residual``, ``free_amplitude``, ``motion_time``, ``rise_time`` or
-        ``settling_time``.
+        ``name`` is a field of :class:`~harness.evaluation.ProfileMetrics`
+        (``residual``, ``residual_peak``, ``free_amplitude``, ``motion_time``,
+        ``rise_time``, ``settling_time``, ``settling_time_paper``) or
+        ``worst_residual_10pct``.
         """
-        return float(getattr(self.profiles[profile].metrics, name))
+        p = self.profiles[profile]
+        if hasattr(p.metrics, name):
+            return float(getattr(p.metrics, name))
+        return float(getattr(p, name))
 
     def relative(self, name: str, profile: str, reference: str = "AL", *,
                  change: bool = False) -> float:
@@ -177,14 +225,58 @@ class ScenarioResult:
         return change_percent(v, r) if change else percent_of(v, r)
 
     def djl_vs_jl(self) -> tuple[float, float]:
-        """Change of DJL against JL in % (residual vibration, settling time): Table 2's unit."""
+        """Change of DJL against JL in % (residual vibration, settling time): Table 2's unit.
+
+        The settling time is the one in the case's band (:attr:`band`);
+        :meth:`djl_vs_jl_all` adds the paper's band and the map-error worst case.
+        """
         return (self.relative("residual", "DJL", "JL", change=True),
                 self.relative("settling_time", "DJL", "JL", change=True))
+
+    def djl_vs_jl_all(self) -> dict[str, float]:
+        """Change of DJL against JL in % of every Table 2 quantity (:data:`TABLE2_METRICS`)."""
+        return {k: self.relative(metric, "DJL", "JL", change=True)
+                for k, (metric, _) in TABLE2_METRICS.items()}
 
     def frequency_span(self) -> tuple[float, float]:
         """Frequency of the tuned mode at the start and at the end of the move (Hz)."""
         mm, z = self.scenario.modemap, self.scenario.z
         return mm.tuned.f(z.z0), mm.tuned.f(z.z0 + z.distance)
+
+    @property
+    def settle_band(self) -> Any:
+        """The scenario's settling band (:class:`~harness.metrics.SettleBand`)."""
+        return self.scenario.simulation.settle_band
+
+    @property
+    def has_paper_settling(self) -> bool:
+        """Whether a settling time into the paper's band is shown apart (DJL ran, other band)."""
+        return math.isfinite(self.paper_band) and self.settle_band.kind != "paper"
+
+    @property
+    def has_worst(self) -> bool:
+        """Whether the worst residual over a ±10 % map error was computed."""
+        return any(math.isfinite(p.worst_residual_10pct) for p in self.profiles.values())
+
+    def move_key(self, profiles: Sequence[str] | None = None) -> tuple[Any, ...] | None:
+        """Return the moves planned for ``profiles`` (default: every profile), exactly.
+
+        Two cases with equal keys run the same moves for those profiles, hence
+        have the same metrics for them.
+
+        Parameters
+        ----------
+        profiles : sequence of str, optional
+            The profiles to compare; those the case did not run are skipped.
+
+        Returns
+        -------
+        tuple or None
+            None if a move is unknown (no ``plan_info``) or no profile is left.
+        """
+        names = [n for n in (profiles or self.profiles) if n in self.profiles]
+        keys = tuple((n, self.profiles[n].move_key) for n in names)
+        return None if not keys or any(k is None for _, k in keys) else keys
 
     # ------------------------------------------------------------- table
 
@@ -222,43 +314,80 @@ class ScenarioResult:
                 lines.append(f"  {p.name} jerk times {ms} ms (imposed by the scenario)")
         return "\n".join(lines)
 
+    def _rows(self) -> list[tuple[str, str, float, bool | None]]:
+        """(label, metric, scale, as_change) of the Table 1 rows; as_change None: no %."""
+        rows: list[tuple[str, str, float, bool | None]] = [
+            ("Residual vibration [mm]", "residual", 1e3, False),
+            (f"  {PEAK_LABEL} [mm]", "residual_peak", 1e3, None),
+            ("Motion time [s] (theoretical rise)", "motion_time", 1.0, True),
+            ("Rise time of the load [s]", "rise_time", 1.0, True),
+            (f"Settling time [s] ({self.band_source})", "settling_time", 1.0, True),
+        ]
+        if self.has_paper_settling:
+            rows.append((f"Settling time [s] ({PAPER_BAND_LABEL})", "settling_time_paper", 1.0,
+                         True))
+        if self.has_worst:
+            rows.append((f"{WORST_LABEL} [mm]", "worst_residual_10pct", 1e3, False))
+        return rows
+
     def table(self) -> str:
         """Format the results like Table 1 of the paper (absolute and relative to AL)."""
         names = list(self.profiles)
         ref = "AL" if "AL" in self.profiles else names[0]
-        rows = [
-            ("Residual vibration [mm]", "residual", 1e3, False),
-            ("Free-oscillation amplitude [mm]", "free_amplitude", 1e3, False),
-            ("Motion time [s] (theoretical rise)", "motion_time", 1.0, True),
-            ("Rise time of the load [s]", "rise_time", 1.0, True),
-            ("Settling time [s]", "settling_time", 1.0, True),
-        ]
-        w0, w = 36, 22
+        rows = self._rows()
+        w0, w = max(36, 2 + max(len(r[0]) for r in rows)), 22
         out = [self.header(), "", " " * w0 + "".join(f"{n:>{w}}" for n in names)]
         for label, key, scale, as_change in rows:
             cells = []
             for n in names:
                 v = self.metric(n, key)
-                if n == ref:
-                    rel = "(ref)" if as_change else "(100 %)"
+                if as_change is None:
+                    rel = ""
+                elif n == ref:
+                    rel = " (ref)" if as_change else " (100 %)"
                 else:
                     r = self.relative(key, n, ref, change=as_change)
-                    rel = f"({_pct(r, signed=as_change)})"
-                cells.append(f"{_fmt(v * scale if math.isfinite(v) else v)} {rel}")
+                    rel = f" ({_pct(r, signed=as_change)})"
+                cells.append(f"{_fmt(v * scale if math.isfinite(v) else v)}{rel}")
             out.append(f"{label:<{w0}}" + "".join(f"{c:>{w}}" for c in cells))
         out.append("")
-        out.append(f"Settling band: +/-{self.band * 1e3:.3g} mm ({self.band_source}); "
-                   f"percentages relative to {ref}.")
+        out.append("Residual vibration: amplitude of the free oscillation when the reference "
+                   "ends (sum over the modes);")
+        out.append(f"the {PEAK_LABEL} depends on the phase at the end and is shown for "
+                   "information only.")
+        src = self.band_source.removeprefix("band: ")
+        line = f"Settling band: +/-{self.band * 1e3:.3g} mm ({src})"
+        if self.has_paper_settling:
+            line += f"; {PAPER_BAND_LABEL}: +/-{self.paper_band * 1e3:.3g} mm"
+        out.append(line + f"; percentages relative to {ref}.")
+        if self.has_worst:
+            rob = self.robustness.label if self.robustness is not None else \
+                "time-varying plant, whole map scaled by 1 + e"
+            out.append(f"{WORST_LABEL}: largest residual for every f(z) x (1 + e), |e| <= 10 %, "
+                       f"jerk times tuned on the nominal map ({rob}).")
         if "DJL" in self.profiles and "JL" in self.profiles:
-            r, s = self.djl_vs_jl()
-            out.append(f"DJL compared with JL: residual vibration {_pct(r, True)}, "
-                       f"settling time {_pct(s, True)}.")
+            ch = self.djl_vs_jl_all()
+            parts = [f"residual vibration {_pct(ch['residual'], True)}",
+                     f"settling time {_pct(ch['settling'], True)} ({self.band_source})"]
+            if self.has_paper_settling:
+                parts.append(f"{_pct(ch['settling_paper'], True)} ({PAPER_BAND_LABEL})")
+            if self.has_worst:
+                parts.append(f"worst residual over +/-10 % map error "
+                             f"{_pct(ch['worst_residual_10pct'], True)}")
+            out.append("DJL compared with JL: " + ", ".join(parts) + ".")
         return "\n".join(out)
 
     # --------------------------------------------------------------- CSV
 
     def rows(self) -> list[dict[str, Any]]:
-        """One dict per profile (the CSV rows)."""
+        """One dict per profile (the CSV rows).
+
+        ``residual_m`` is the residual vibration (free-oscillation amplitude when
+        the reference ends; equal to ``free_amplitude_m``), ``residual_peak_m``
+        the sampled peak |ε| after the motion; the settling time is in the
+        band ``band_m`` (``band_source``), ``settling_time_paper_band_s`` in the
+        paper's band ``paper_band_m`` (DJL's residual).
+        """
         sc = self.scenario
         f0, f1 = self.frequency_span()
         out = []
@@ -288,6 +417,13 @@ class ScenarioResult:
                 "settling_time_change_pct_vs_DJL": self.relative("settling_time", n, "DJL",
                                                                  change=True),
                 "band_m": self.band, "z_v_max_m_s": p.z_v_max, "z_synced": p.z_synced,
+                # added columns
+                "band_source": self.band_source,
+                "residual_peak_m": met.residual_peak,
+                "settling_time_paper_band_s": met.settling_time_paper,
+                "paper_band_m": self.paper_band,
+                "residual_worst_map10_m": p.worst_residual_10pct,
+                "residual_worst_map10_pct_of_AL": self.relative("worst_residual_10pct", n),
             })
         return out
 
@@ -306,11 +442,43 @@ class ScenarioResult:
         title = title or f"Scenario {sc.name}: {sc.move.axis} move d = {sc.move.distance:g} m, " \
             f"Z {sc.z.z0:g} -> {sc.z.z0 + sc.z.distance:g} m"
         return plot_runs(runs, title=title, band=self.band,
-                         metrics={n: p.metrics for n, p in self.profiles.items()})
+                         metrics={n: p.metrics for n, p in self.profiles.items()},
+                         band_label=self.band_source)
+
+
+TABLE2_PROFILES = ("JL", "DJL")
+"""The profiles Table 2 compares (DJL against JL): a sweep's duplicates are the cases where
+both plan the same moves."""
+
+TABLE2_METRICS: dict[str, tuple[str, str]] = {
+    "residual": ("residual", "Residual vibrations"),
+    "settling": ("settling_time", "Settling times"),
+    "settling_paper": ("settling_time_paper", f"Settling times ({PAPER_BAND_LABEL})"),
+    "worst_residual_10pct": ("worst_residual_10pct",
+                             f"{WORST_LABEL} (time-varying plant, whole map x (1 + e))"),
+}
+"""Quantities of Table 2: key → (metric of :meth:`ScenarioResult.metric`, label)."""
+
+
+def _envelope(run: Any) -> tuple[np.ndarray, np.ndarray] | None:
+    """Free-oscillation envelope Σ A_i e^{-σ_i (t - t_end)} from the end of the reference."""
+    states, modes = getattr(run, "state_end", None), getattr(run, "modes_end", None)
+    if not states or not modes:
+        return None
+    from .plant import free_amplitude
+
+    t = run.t[run.t >= run.t_end - 1e-12]
+    if t.size == 0:
+        return None
+    tau = t - t[0]
+    env = np.zeros_like(t)
+    for (e, de), m in zip(states, modes, strict=True):
+        env += free_amplitude(e, de, m) * np.exp(-m.sigma * tau)
+    return t, env
 
 
 def plot_runs(runs: Mapping[str, Any], *, title: str = "", band: float | None = None,
-              metrics: Mapping[str, Any] | None = None):
+              metrics: Mapping[str, Any] | None = None, band_label: str | None = None):
     """Figure of co-simulation runs: x, v, a, j | ε with band, f(t), z(t).
 
     Parameters
@@ -323,6 +491,8 @@ def plot_runs(runs: Mapping[str, Any], *, title: str = "", band: float | None = 
         Settling band (m), shaded on the ε plot.
     metrics : mapping of str to ProfileMetrics, optional
         Shown in the legend of the ε plot.
+    band_label : str, optional
+        Source of the band, shown in its legend entry.
 
     Returns
     -------
@@ -355,6 +525,10 @@ def plot_runs(runs: Mapping[str, Any], *, title: str = "", band: float | None = 
                 zoom = max(zoom, m.residual)
         for ax in (ax_e, ax_r):
             ax.plot(r.t, r.eps * 1e3, color=c, lw=1.0, label=lab if ax is ax_e else None)
+        env = _envelope(r)
+        if env is not None:
+            ax_r.plot(env[0], env[1] * 1e3, color=c, lw=0.8, ls="--")
+            ax_r.plot(env[0], -env[1] * 1e3, color=c, lw=0.8, ls="--")
         for ax in (ax_e, ax_r, ax_f):
             ax.axvline(r.t_end, color=c, ls=":", lw=1.0)
         if metrics and name in metrics and math.isfinite(metrics[name].settling_time):
@@ -366,7 +540,9 @@ def plot_runs(runs: Mapping[str, Any], *, title: str = "", band: float | None = 
     if band:
         for ax in (ax_e, ax_r):
             ax.axhspan(-band * 1e3, band * 1e3, color="gold", alpha=0.35, lw=0,
-                       label=f"band +/-{band * 1e3:.3g} mm" if ax is ax_e else None)
+                       label=(f"settling band +/-{band * 1e3:.3g} mm"
+                              + (f" ({band_label})" if band_label else ""))
+                       if ax is ax_e else None)
         zoom = max(zoom, band)
     if zoom > 0:
         ax_r.set_ylim(-3.0 * zoom * 1e3, 3.0 * zoom * 1e3)
@@ -379,8 +555,9 @@ def plot_runs(runs: Mapping[str, Any], *, title: str = "", band: float | None = 
     ax_e.set_title("deflection of the load ε (dotted: end of each motion)", fontsize="medium")
     ax_e.legend(loc="upper right", fontsize="small")
     ax_r.set_ylabel("ε [mm], zoom")
-    ax_r.text(0.01, 0.95, "residual vibration (▼: settled into the band)",
-              transform=ax_r.transAxes, va="top", fontsize="small")
+    ax_r.text(0.01, 0.95, "residual vibration (dashed: free-oscillation envelope after the "
+              "motion;\nat the end of the motion it equals the residual; ▼: settled into the band)",
+              transform=ax_r.transAxes, va="top", fontsize="x-small")
     ax_f.set_ylabel("f [Hz] (tuned mode)")
     ax_z.set_ylabel("z [m]")
     for ax in (ax_e, ax_r, ax_f, ax_z):
@@ -396,12 +573,26 @@ def plot_runs(runs: Mapping[str, Any], *, title: str = "", band: float | None = 
     if metrics:
         cols = list(metrics)
         cells = [[f"{metrics[n].residual * 1e3:.3g}" for n in cols],
+                 [f"{getattr(metrics[n], 'residual_peak', math.nan) * 1e3:.3g}" for n in cols],
                  [f"{metrics[n].motion_time:.3g}" for n in cols],
                  [_fmt(metrics[n].settling_time) for n in cols]]
-        tab = ax_m.table(cellText=cells, colLabels=cols,
-                         rowLabels=["residual [mm]", "motion time [s]", "settling [s]"],
-                         loc="center", cellLoc="center")
-        tab.scale(0.8, 1.3)
+        labels = ["residual [mm]", "peak |ε| (sampled) [mm]", "motion time [s]",
+                  "settling [s] (1)"]
+        notes = [f"residual: free-oscillation amplitude at the end; {PEAK_LABEL}: phase-dependent",
+                 "(1) settling band" + (f": {band_label.removeprefix('band: ')}"
+                                        if band_label else "")]
+        if any(math.isfinite(getattr(metrics[n], "settling_time_paper", math.nan))
+               and getattr(metrics[n], "paper_band", math.nan) != metrics[n].band
+               for n in cols):
+            cells.append([_fmt(metrics[n].settling_time_paper) for n in cols])
+            labels.append("settling [s] (2)")
+            notes.append(f"(2) {PAPER_BAND_LABEL}")
+        tab = ax_m.table(cellText=cells, colLabels=cols, rowLabels=labels, cellLoc="center",
+                         bbox=[0.42, 0.3, 0.58, 0.7])
+        tab.auto_set_font_size(False)
+        tab.set_fontsize(8)
+        ax_m.text(0.0, 0.0, "\n".join(notes), transform=ax_m.transAxes, fontsize="x-small",
+                  va="bottom")
     fig.suptitle(title)
     fig.subplots_adjust(left=0.09, right=0.98, top=0.93, bottom=0.06)
     return fig
@@ -414,6 +605,16 @@ def plot_runs(runs: Mapping[str, Any], *, title: str = "", band: float | None = 
 class SweepResult:
     """A sweep over the paper's test set: every case's Table 1 and their Table 2.
 
+    Identical moves are counted once in the statistics (:meth:`stats`,
+    :func:`format_table2`, :meth:`plot`): two cases are the same move when the
+    generators planned exactly the same moves for the profiles Table 2
+    compares, JL and DJL (:data:`TABLE2_PROFILES`, :meth:`ScenarioResult.move_key`;
+    every profile if one of them is missing), e.g. at d = 0.1 m, where JL and
+    DJL never reach v_max = 0.5 m/s, so that v_max = 0.5 and 2 m/s plan the
+    same JL and DJL moves (AL, which does reach 0.5 m/s, differs).  The first
+    case of each move is the one counted.  The CSV keeps every case and names
+    the first case of each duplicate (``duplicate_of``).
+
     Attributes
     ----------
     scenario : Scenario
@@ -425,29 +626,116 @@ class SweepResult:
     scenario: Any
     cases: list[ScenarioResult]
 
+    # ------------------------------------------------------------ moves
+
+    def duplicates(self, profiles: Sequence[str] = ()) -> list[int | None]:
+        """For each case, the index of the first case with the same moves, or None.
+
+        None for the first case of each move.  A case whose moves are unknown
+        (no ``plan_info``) is never merged.
+
+        Parameters
+        ----------
+        profiles : sequence of str
+            Profiles whose moves must coincide; default :data:`TABLE2_PROFILES`
+            (JL and DJL), or every profile of a case that lacks one of them.
+        """
+        first: dict[Any, int] = {}
+        out: list[int | None] = []
+        for i, c in enumerate(self.cases):
+            names = tuple(profiles) or (TABLE2_PROFILES if all(
+                p in c.profiles for p in TABLE2_PROFILES) else tuple(c.profiles))
+            k = c.move_key(names)
+            j = i if k is None else first.setdefault(k, i)
+            out.append(None if j == i else j)
+        return out
+
+    def distinct(self) -> list[ScenarioResult]:
+        """Return the cases counted in the statistics: the first of each distinct move."""
+        return [c for c, d in zip(self.cases, self.duplicates(), strict=True) if d is None]
+
+    def case_label(self, case: ScenarioResult) -> str:
+        """Short name of a case: its sweep values (``d=0.1 dz=0.2 v=2``)."""
+        name, prefix = case.scenario.name, self.scenario.name + " "
+        return name[len(prefix):] if name.startswith(prefix) else name
+
+    def merged_note(self) -> str:
+        """How many cases, distinct moves and merged duplicates, and which.
+
+        E.g. ``50 cases, 45 distinct moves (5 duplicates merged: d=0.1 dz=0.1 v=2 = v=0.5;
+        ...)``: the duplicate first, then the sweep values in which its original differs.
+        """
+        dup = self.duplicates()
+        pairs = [(i, j) for i, j in enumerate(dup) if j is not None]
+        n, k = len(self.cases), len(self.cases) - len(pairs)
+        if not pairs:
+            return f"{n} cases, {k} distinct moves (no duplicate)"
+        items = []
+        for i, j in pairs:
+            a, b = self.case_label(self.cases[i]).split(), self.case_label(self.cases[j]).split()
+            diff = [y for x, y in zip(a, b, strict=False) if x != y] if len(a) == len(b) else b
+            items.append(f"{' '.join(a)} = {' '.join(diff or b)}")
+        return (f"{n} cases, {k} distinct moves ({len(pairs)} duplicate"
+                f"{'s' if len(pairs) > 1 else ''} merged, same JL and DJL moves: "
+                f"{'; '.join(items)})")
+
+    @property
+    def band_label(self) -> str:
+        """Source of the settling band of the cases (the same in every case)."""
+        sources = {c.band_source for c in self.cases}
+        return sources.pop() if len(sources) == 1 else self.scenario.simulation.settle_band.label
+
+    # ------------------------------------------------------------ numbers
+
     def changes(self) -> tuple[np.ndarray, np.ndarray]:
-        """DJL against JL in % for every case: (residual vibration, settling time)."""
+        """DJL against JL in % for every case: (residual vibration, settling time in the band).
+
+        Every case, duplicates included (see :meth:`changes_all` for the others).
+        """
         pairs = [c.djl_vs_jl() for c in self.cases]
         return (np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs]))
 
+    def changes_all(self, *, distinct: bool = True) -> dict[str, np.ndarray]:
+        """DJL against JL in % of every Table 2 quantity (:data:`TABLE2_METRICS`).
+
+        Parameters
+        ----------
+        distinct : bool
+            Only the first case of each distinct move (the statistics' set);
+            False: every case.
+        """
+        cases = self.distinct() if distinct else self.cases
+        ch = [c.djl_vs_jl_all() for c in cases]
+        return {k: np.array([c[k] for c in ch], dtype=float) for k in TABLE2_METRICS}
+
     def stats(self) -> dict[str, Table2Stats]:
-        """Table 2 statistics: ``{"residual": ..., "settling": ...}``."""
-        r, s = self.changes()
-        return {"residual": table2_stats(r), "settling": table2_stats(s)}
+        """Table 2 statistics over the distinct moves.
+
+        Keys: ``residual``, ``settling`` (in the cases' band), ``settling_paper``
+        (in the paper's band, DJL's residual), ``worst_residual_10pct`` (worst
+        residual over a ±10 % map error; n = 0 when not computed).
+        """
+        return {k: table2_stats(v) for k, v in self.changes_all(distinct=True).items()}
 
     def table(self) -> str:
         """Table 2 of the paper for this sweep alone."""
         return format_table2([self])
 
+    # --------------------------------------------------------------- CSV
+
     def rows(self) -> list[dict[str, Any]]:
-        """Every case's CSV rows."""
+        """Every case's CSV rows (duplicates included, marked in ``duplicate_of``)."""
         out = []
-        for c in self.cases:
-            r, s = c.djl_vs_jl()
+        dup = self.duplicates()
+        for c, d in zip(self.cases, dup, strict=True):
+            ch = c.djl_vs_jl_all()
             for row in c.rows():
                 row = {"sweep": self.scenario.name, **row}
-                row["case_djl_vs_jl_residual_pct"] = r
-                row["case_djl_vs_jl_settling_pct"] = s
+                row["case_djl_vs_jl_residual_pct"] = ch["residual"]
+                row["case_djl_vs_jl_settling_pct"] = ch["settling"]
+                row["duplicate_of"] = "" if d is None else self.cases[d].scenario.name
+                row["case_djl_vs_jl_settling_paper_band_pct"] = ch["settling_paper"]
+                row["case_djl_vs_jl_residual_worst_map10_pct"] = ch["worst_residual_10pct"]
                 out.append(row)
         return out
 
@@ -455,43 +743,73 @@ class SweepResult:
         """Write :meth:`rows` as CSV; return the path."""
         return write_csv(path, self.rows())
 
+    # -------------------------------------------------------------- plot
+
     def plot(self, title: str | None = None):
-        """Per case: residual of DJL against JL, and the % changes; return the figure."""
+        """Per distinct move: residual of DJL against JL, and the % changes; return the figure."""
         import matplotlib.pyplot as plt
 
+        cases = self.distinct()
         fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(13, 5.5))
-        jl = np.array([c.metric("JL", "residual") for c in self.cases]) * 1e3
-        djl = np.array([c.metric("DJL", "residual") for c in self.cases]) * 1e3
-        dz = np.array([c.scenario.z.distance for c in self.cases])
+        jl = np.array([c.metric("JL", "residual") for c in cases]) * 1e3
+        djl = np.array([c.metric("DJL", "residual") for c in cases]) * 1e3
+        dz = np.array([c.scenario.z.distance for c in cases])
         sc = ax1.scatter(jl, djl, c=dz, cmap="viridis", s=30)
         lim = [min(jl.min(), djl.min()) * 0.8, max(jl.max(), djl.max()) * 1.25]
         ax1.plot(lim, lim, "k--", lw=0.8, label="DJL = JL")
         ax1.set_xscale("log")
         ax1.set_yscale("log")
-        ax1.set_xlabel("JL residual vibration [mm]")
+        ax1.set_xlabel("JL residual vibration [mm] (free-oscillation amplitude at the end)")
         ax1.set_ylabel("DJL residual vibration [mm]")
         ax1.grid(True, which="both", alpha=0.3)
         ax1.legend(fontsize="small")
         fig.colorbar(sc, ax=ax1, label="Z travel dz [m]")
-        r, s = self.changes()
-        idx = np.arange(len(self.cases))
-        ax2.bar(idx - 0.2, r, width=0.4, color="tab:red", label="residual vibration")
-        ax2.bar(idx + 0.2, s, width=0.4, color="tab:purple", label="settling time")
+        ch = self.changes_all(distinct=True)
+        idx = np.arange(len(cases))
+        bars = [("residual", "residual vibration", "tab:red"),
+                ("settling", f"settling time ({self.band_label})", "tab:purple")]
+        if np.isfinite(ch["settling_paper"]).any() and "paper" not in self.band_label:
+            bars.append(("settling_paper", f"settling time ({PAPER_BAND_LABEL})", "tab:orange"))
+        if np.isfinite(ch["worst_residual_10pct"]).any():
+            bars.append(("worst_residual_10pct", "worst residual, map error +/-10 %", "tab:green"))
+        wb = 0.8 / len(bars)
+        for i, (k, lab, col) in enumerate(bars):
+            ax2.bar(idx - 0.4 + wb * (i + 0.5), ch[k], width=wb, color=col, label=lab)
         ax2.axhline(0.0, color="k", lw=0.8)
-        ax2.set_xlabel("case (d, dz, v_max: see the CSV)")
+        ax2.set_xlabel("distinct move (d, dz, v_max: see the CSV; duplicates counted once)")
         ax2.set_ylabel("DJL compared with JL [%]")
         ax2.grid(True, alpha=0.3)
         ax2.legend(fontsize="small")
         st = self.stats()
-        fig.suptitle(title or (f"Sweep {self.scenario.name} ({len(self.cases)} cases): DJL vs JL "
+        fig.suptitle(title or (f"Sweep {self.scenario.name}: {self.merged_note()}\nDJL vs JL "
                                f"residual {st['residual'].mean:+.1f} % on average, settling time "
-                               f"{st['settling'].mean:+.1f} %"))
+                               f"{st['settling'].mean:+.1f} % ({self.band_label})"),
+                     fontsize="medium")
         fig.tight_layout()
         return fig
 
 
+def _table2_sections(sweeps: Sequence[SweepResult]) -> list[tuple[str, str]]:
+    """(key, heading) of the Table 2 sections that have numbers."""
+    stats = [s.stats() for s in sweeps]
+    labels = {s.band_label for s in sweeps}
+    band = labels.pop() if len(labels) == 1 else "band: " + "; ".join(
+        f"{s.scenario.name}: {s.band_label}" for s in sweeps)
+    sections = [("residual", "Residual vibrations (free-oscillation amplitude at the end of "
+                             "the motion)"),
+                ("settling", f"Settling times ({band})")]
+    if all(s.band_label != PAPER_BAND_LABEL for s in sweeps):
+        sections.append(("settling_paper", TABLE2_METRICS["settling_paper"][1]))
+    sections.append(("worst_residual_10pct", TABLE2_METRICS["worst_residual_10pct"][1]))
+    return [(k, h) for k, h in sections if any(st[k].n > 0 for st in stats)]
+
+
 def format_table2(sweeps: Sequence[SweepResult]) -> str:
     """Table 2 of the paper: one column per sweep (e.g. X and Y directions).
+
+    Each distinct move is counted once; the settling times are given in the
+    sweeps' band and, separately, in the paper's band (DJL's residual), each
+    labelled; the worst residual over a ±10 % map error when computed.
 
     Parameters
     ----------
@@ -504,25 +822,36 @@ def format_table2(sweeps: Sequence[SweepResult]) -> str:
     names = [s.scenario.name for s in sweeps]
     stats = [s.stats() for s in sweeps]
     w0, w = 34, 14
-    out = ["Statistics of the DJL profile compared with the JL profile (Table 2), in %",
+    out = ["Statistics of the DJL profile compared with the JL profile (Table 2), in %; "
+           "each distinct move counted once",
            " " * w0 + "".join(f"{n:>{w}}" for n in names)]
-    for key, label in (("residual", "Residual vibrations"), ("settling", "Settling times")):
+    for key, label in _table2_sections(sweeps):
         out.append(label)
         for field_, lab in (("mean", "Mean value"), ("max", "Max value (largest reduction)"),
                             ("min", "Min value (smallest reduction)"),
                             ("std", "Standard deviation")):
             out.append(f"  {lab:<{w0 - 2}}" + "".join(
                 f"{getattr(st[key], field_):>{w}.1f}" for st in stats))
-    out.append(f"  {'cases':<{w0 - 2}}" + "".join(f"{st['residual'].n:>{w}d}" for st in stats))
+    out.append(f"  {'cases':<{w0 - 2}}" + "".join(f"{len(s.cases):>{w}d}" for s in sweeps))
+    out.append(f"  {'distinct moves (counted)':<{w0 - 2}}"
+               + "".join(f"{len(s.distinct()):>{w}d}" for s in sweeps))
+    for s in sweeps:
+        out.append(f"{s.scenario.name}: {s.merged_note()}")
     return "\n".join(out)
 
 
 def table2_rows(sweeps: Sequence[SweepResult]) -> list[dict[str, Any]]:
-    """Table 2 as CSV rows (one per statistic and sweep)."""
+    """Table 2 as CSV rows (one per statistic and sweep; ``cases``: values counted)."""
     rows = []
     for s in sweeps:
-        for key, st in s.stats().items():
+        st_all = s.stats()
+        for key, _ in _table2_sections([s]):
+            st = st_all[key]
             rows.append({"sweep": s.scenario.name, "quantity": key, "mean_pct": st.mean,
                          "max_reduction_pct": st.max, "min_reduction_pct": st.min,
-                         "std_pct": st.std, "cases": st.n})
+                         "std_pct": st.std, "cases": st.n,
+                         "band": PAPER_BAND_LABEL if key == "settling_paper" else
+                         (s.band_label if key == "settling" else ""),
+                         "sweep_cases": len(s.cases), "distinct_moves": len(s.distinct()),
+                         "duplicates_merged": s.merged_note()})
     return rows

@@ -18,7 +18,10 @@ Format (all lengths in m, times in s, frequencies in Hz)::
     t_after = 3.0                   # simulated time after both axes have stopped
     fmi_version = 2                 # 2 or 3 (the package's own FMU)
     fmu = "my_generator.fmu"        # or a generator FMU file (relative to this file)
-    band = 0.0005                   # settling band; default: largest residual of DJL
+    settle_band = "1 % of AL"       # settling band, one for every profile of a case:
+                                    # a number (m), "P % of AL" (P in (0, 100]: of AL's
+                                    # residual) or "paper" (DJL's residual, Table 2's band)
+    # band = 0.0005                 # old name of a settle_band in m (not both)
     short_stage = 2                 # FMU rule for short stages (2 = the paper's)
 
     [move]                          # the excited axis (X or Y)
@@ -59,6 +62,14 @@ Format (all lengths in m, times in s, frequencies in Hz)::
     distance = [0.1, 0.2, 0.3]      # replaces move.distance
     z_distance = [0.1, 0.3, 0.5]    # replaces z.distance
     v_max = [0.5, 2.0]              # replaces move.v_max
+
+    [map]                           # optional: the workspace map of ``djl-fmu map``
+    z0 = [0.0, 0.05, 0.1]           # replaces z.z0            (default: [z.z0])
+    z_distance = [0.05, 0.25, 0.45] # replaces z.distance      (default: [z.distance])
+    distance = [0.05, 0.1, 0.2]     # replaces move.distance   (default: [move.distance])
+    v_max = [0.5, 2.0]              # replaces move.v_max      (default: [move.v_max])
+    # moves: every combination, in the order z0, z_distance, distance, v_max
+    # (v_max varies fastest); see docs/map.md
 """
 
 from __future__ import annotations
@@ -78,11 +89,13 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
+from .metrics import DEFAULT_SETTLE_BAND, SettleBand, parse_settle_band
 from .modemap import CantileverLaw, ConstantLaw, LinearLaw, ModeMap, ModeSpec, TableLaw
 from .tuning import RULES
 
 __all__ = [
     "CompareSpec",
+    "MapSpec",
     "MoveSpec",
     "Scenario",
     "ScenarioError",
@@ -129,7 +142,13 @@ class ScenarioError(ValueError):
 
 @dataclass(frozen=True)
 class SimulationSpec:
-    """``[simulation]``: sampling, window, FMU and settling band."""
+    """``[simulation]``: sampling, window, FMU and settling band.
+
+    ``settle_band`` is the settling band of every profile of a case
+    (:class:`harness.metrics.SettleBand`; default 1 % of AL's residual);
+    ``band`` mirrors it when it is a number of metres (None otherwise), as the
+    old key of the same name did.
+    """
 
     Te: float = 1e-3
     step: float = 1e-3
@@ -138,6 +157,7 @@ class SimulationSpec:
     fmu: Path | None = None
     band: float | None = None
     short_stage: int = 2
+    settle_band: SettleBand = DEFAULT_SETTLE_BAND
 
 
 @dataclass(frozen=True)
@@ -201,6 +221,35 @@ class SweepSpec:
 
 
 @dataclass(frozen=True)
+class MapSpec:
+    """``[map]``: the workspace grid of ``djl-fmu map`` (:meth:`Scenario.map_cases`).
+
+    The moves are every combination of the four lists, in the order
+    ``z0``, ``z_distance``, ``distance``, ``v_max`` with ``v_max`` varying
+    fastest: move ``k`` (0-based) is
+    ``k = ((i_z0 * n_dz + i_dz) * n_d + i_d) * n_v + i_v``.  A list left as
+    None takes the scenario's single value (``z.z0``, ``z.distance``,
+    ``move.distance``, ``move.v_max``).
+
+    Attributes
+    ----------
+    z0 : tuple of float, optional
+        Start positions of Z (m).
+    z_distance : tuple of float, optional
+        Signed Z travels (m); 0 keeps Z still.
+    distance : tuple of float, optional
+        Signed lengths of the excited axis' move (m), none 0.
+    v_max : tuple of float, optional
+        Velocity limits of the excited axis (m/s), all > 0.
+    """
+
+    z0: tuple[float, ...] | None = None
+    z_distance: tuple[float, ...] | None = None
+    distance: tuple[float, ...] | None = None
+    v_max: tuple[float, ...] | None = None
+
+
+@dataclass(frozen=True)
 class Scenario:
     """A checked scenario.
 
@@ -217,6 +266,7 @@ class Scenario:
     sweep: SweepSpec | None = None
     description: str = ""
     source: str = "<string>"
+    map: MapSpec | None = None
 
     @property
     def is_sweep(self) -> bool:
@@ -238,6 +288,73 @@ class Scenario:
                 self, move=mv, z=zz, sweep=None,
                 name=f"{self.name} d={d:g} dz={dz:g} v={v:g}"))
         return out
+
+    # ------------------------------------------------------------ the map
+
+    def map_axes(self) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...],
+                                tuple[float, ...]]:
+        """Values of the map's grid: ``(z0, z_distance, distance, v_max)``.
+
+        A list the ``[map]`` table does not give (or every list, without a
+        ``[map]`` table) is the scenario's single value.
+        """
+        mp = self.map or MapSpec()
+        return (mp.z0 or (self.z.z0,), mp.z_distance or (self.z.distance,),
+                mp.distance or (self.move.distance,), mp.v_max or (self.move.v_max,))
+
+    @property
+    def map_size(self) -> int:
+        """Number of moves of the map's full grid (1 without a ``[map]`` table)."""
+        return math.prod(len(a) for a in self.map_axes())
+
+    def map_points(self, max_moves: int | None = None
+                   ) -> list[tuple[float, float, float, float]]:
+        """Return the moves of the map, ``(z0, z_distance, distance, v_max)``, in grid order.
+
+        Parameters
+        ----------
+        max_moves : int, optional
+            Keep only the first ``max_moves`` moves (>= 1).
+
+        Returns
+        -------
+        list of tuple of float
+            The cartesian product of :meth:`map_axes`, ``v_max`` varying fastest.
+
+        Raises
+        ------
+        ValueError
+            If ``max_moves`` is not an integer >= 1.
+        """
+        n = self.map_size
+        if max_moves is not None:
+            if isinstance(max_moves, bool) or not isinstance(max_moves, int) or max_moves < 1:
+                raise ValueError(f"max_moves must be an integer >= 1, got {max_moves!r}")
+            n = min(n, max_moves)
+        return list(itertools.islice(itertools.product(*self.map_axes()), n))
+
+    def map_case(self, z0: float, z_distance: float, distance: float, v_max: float
+                 ) -> Scenario:
+        """Return the single-move scenario of one point of the map (no sweep, no map)."""
+        mv = dataclasses.replace(self.move, distance=distance, v_max=v_max)
+        zz = dataclasses.replace(self.z, z0=z0, distance=z_distance)
+        return dataclasses.replace(
+            self, move=mv, z=zz, sweep=None, map=None,
+            name=f"{self.name} z0={z0:g} dz={z_distance:g} d={distance:g} v={v_max:g}")
+
+    def map_cases(self, max_moves: int | None = None) -> list[Scenario]:
+        """Return the single-move scenarios of the map, in grid order (see :class:`MapSpec`).
+
+        Parameters
+        ----------
+        max_moves : int, optional
+            Keep only the first ``max_moves`` moves of the grid.
+
+        Returns
+        -------
+        list of Scenario
+        """
+        return [self.map_case(*p) for p in self.map_points(max_moves)]
 
     def with_fmu(self, fmu: Path | None = None, fmi_version: int | None = None) -> Scenario:
         """Copy with another FMU file and/or FMI version (command-line overrides)."""
@@ -447,10 +564,31 @@ def parse_scenario(data: Mapping[str, Any], source: str = "<string>",
         if not fmu.is_absolute() and base_dir is not None:
             fmu = base_dir / fmu
         _check_fmu(source, "simulation.fmu", fmu)
-    band = s.number("band", None, positive=True, what="settling band in m")
+    band = s.number("band", None, positive=True, what="settling band in m (old name of "
+                    "settle_band)")
+    settle_raw = s.raw("settle_band", None)
+    if settle_raw is not None and band is not None:
+        raise s.err("settle_band", settle_raw, f"give settle_band or its old name band "
+                    f"(= {band:g}), not both")
+    settle_band = DEFAULT_SETTLE_BAND if band is None else SettleBand("m", band)
+    if settle_raw is not None:
+        try:
+            settle_band = parse_settle_band(settle_raw)
+        except ValueError as e:
+            raise s.err("settle_band", settle_raw, str(e)) from None
+        # a band made of a profile's residual needs that profile (checked on the raw list:
+        # a bad list is reported by [compare] below)
+        listed = top.data.get("compare", {})
+        listed = listed.get("profiles") if isinstance(listed, Mapping) else None
+        if (settle_band.needs and isinstance(listed, list)
+                and all(isinstance(p, str) for p in listed) and settle_band.needs not in listed):
+            raise s.err("settle_band", settle_raw, f"needs the residual of {settle_band.needs}, "
+                        f"which is not among compare.profiles = {listed!r}")
     short_stage = s.integer("short_stage", 2, choices=(1, 2))
     s.finish()
-    sim = SimulationSpec(Te, step, t_after, fmi_version, fmu, band, short_stage)
+    sim = SimulationSpec(Te, step, t_after, fmi_version, fmu,
+                         settle_band.value if settle_band.kind == "m" else None, short_stage,
+                         settle_band)
 
     # [move]
     m = _Table(source, "move", top.raw("move", what="the excited axis' move ([move] table)"))
@@ -516,22 +654,54 @@ def parse_scenario(data: Mapping[str, Any], source: str = "<string>",
             raise ScenarioError(source, "sweep", {}, "give at least one of distance, "
                                 "z_distance, v_max")
         sweep = SweepSpec(sd, sz, sv)
+
+    # [map]
+    wmap = None
+    if "map" in top.data:
+        mt = _Table(source, "map", top.raw("map"))
+        m_z0 = mt.numbers("z0", None, what="Z start positions in m")
+        m_dz = mt.numbers("z_distance", None, what="Z move lengths in m")
+        m_d = mt.numbers("distance", None, what="move lengths in m")
+        m_v = mt.numbers("v_max", None, what="velocity limits in m/s")
+        mt.finish()
+        for k, vals in (("z0", m_z0), ("z_distance", m_dz), ("distance", m_d), ("v_max", m_v)):
+            if vals and len(set(vals)) != len(vals):
+                raise mt.err(k, list(vals), "values must be distinct")
+        if m_d and any(x == 0 for x in m_d):
+            raise mt.err("distance", list(m_d), "move lengths must not be 0")
+        if m_v and any(not x > 0 for x in m_v):
+            raise mt.err("v_max", list(m_v), "velocity limits must be > 0")
+        if not (m_z0 or m_dz or m_d or m_v):
+            raise ScenarioError(source, "map", {}, "give at least one of z0, z_distance, "
+                                "distance, v_max")
+        wmap = MapSpec(m_z0, m_dz, m_d, m_v)
     top.finish()
 
     scen = Scenario(name, move, z, ModeMap(modes, tune_mode - 1), sim, compare, sweep,
-                    description, source)
+                    description, source, wmap)
     # the mode laws must be valid wherever Z goes, in every case
     for case in scen.cases():
-        z_min, z_max = case.z.z_range
-        for i, md in enumerate(modes):
-            try:
-                md.check_range(z_min, z_max)
-            except ValueError as e:
-                key = f"mode[{i + 1}]." + ("z" if md.law.kind == "table" else
-                                           "L_ref" if md.law.kind == "cantilever" else "f")
-                raise ScenarioError(source, key, _law_value(md), f"{e} (Z moves from "
-                                    f"{case.z.z0:g} m by {case.z.distance:g} m)") from None
+        _check_z_range(source, modes, case.z.z0, case.z.distance)
+    if wmap is not None:
+        # once per distinct Z move of the grid (not per move: a map has 10^4 of them)
+        z0s, dzs, _, _ = scen.map_axes()
+        for z0_, dz_ in itertools.product(z0s, dzs):
+            _check_z_range(source, modes, z0_, dz_, " in the [map] grid")
     return scen
+
+
+def _check_z_range(source: str, modes: tuple[ModeSpec, ...], z0: float, dz: float,
+                   where: str = "") -> None:
+    """Raise :class:`ScenarioError` unless every mode law is valid from z0 to z0 + dz."""
+    z_min, z_max = min(z0, z0 + dz), max(z0, z0 + dz)
+    for i, md in enumerate(modes):
+        try:
+            md.check_range(z_min, z_max)
+        except ValueError as e:
+            key = f"mode[{i + 1}]." + ("z" if md.law.kind == "table" else
+                                       "L_ref" if md.law.kind == "cantilever" else "f")
+            raise ScenarioError(source, key, _law_value(md), f"{e} (Z moves from "
+                                f"{z0:g} m by {dz:g} m{where})") from None
 
 
 def _law_value(md: ModeSpec) -> Any:

@@ -232,3 +232,69 @@ def test_random_values_are_accepted_exactly_when_valid(zeta, f0, step_ratio):
     else:
         with pytest.raises(ScenarioError):
             parse_scenario(doc)
+
+
+# ------------------------------------------------------- settling band
+
+
+def _with_settle(line: str, profiles: str | None = None) -> str:
+    text = replace_line(GOOD, "fmi_version = 3", "fmi_version = 3\n" + line)
+    if profiles is not None:
+        text = replace_line(text, 'profiles = ["JL", "DJL"]', f"profiles = {profiles}")
+    return text
+
+
+@pytest.mark.parametrize("line, kind, value, band", [
+    ("", "AL", 0.01, None),                                  # the documented default
+    ("settle_band = 0.0005", "m", 0.0005, 0.0005),
+    ("band = 0.0005", "m", 0.0005, 0.0005),                   # the old key, an alias
+    ('settle_band = "paper"', "paper", None, None),
+    ('settle_band = "2.5 % of AL"', "AL", 0.025, None),
+    ('settle_band = "2.5% of AL"', "AL", 0.025, None),
+    ('settle_band = "100 % of AL"', "AL", 1.0, None),
+])
+def test_settle_band_values(tmp_path, line, kind, value, band):
+    from harness.metrics import SettleBand
+
+    profiles = None if kind == "paper" else '["AL", "JL", "DJL"]'
+    sim = load_scenario(write(tmp_path, _with_settle(line, profiles))).simulation
+    assert sim.settle_band.kind == kind
+    assert sim.band == band
+    if value is not None:
+        assert sim.settle_band.value == pytest.approx(value, rel=1e-15)
+    # what it resolves to in a case (residuals in m)
+    res = {"AL": 2e-3, "JL": 2e-4, "DJL": 1e-4}
+    expected = {"AL": 2e-3 * (value or 0), "m": value, "paper": 1e-4}[kind]
+    assert sim.settle_band.resolve(res) == pytest.approx(expected, rel=1e-15)
+    assert SettleBand(kind, sim.settle_band.value) == sim.settle_band
+
+
+def test_default_settle_band_without_al_loads():
+    """The default (1 % of AL) is not refused when AL is not compared: AL is then run for the
+    band only (harness.evaluation.run_case)."""
+    sc = parse_scenario({"move": {"distance": 0.3, "v_max": 1.0, "a_max": 4.0},
+                         "mode": [{"zeta": 0.03, "law": "constant", "f": 7.0}],
+                         "compare": {"profiles": ["JL", "DJL"]}})
+    assert sc.simulation.settle_band.kind == "AL" and sc.simulation.band is None
+
+
+@pytest.mark.parametrize("line, profiles, value, words", [
+    ('settle_band = "0 % of AL"', None, "'0 % of AL'", "(0, 100]"),
+    ('settle_band = "150 % of AL"', None, "'150 % of AL'", "(0, 100]"),
+    ("settle_band = -0.001", None, "-0.001", "> 0"),
+    ("settle_band = 0", None, "0", "> 0"),
+    ('settle_band = "1 % of JL"', None, "'1 % of JL'", "paper"),
+    ('settle_band = "tight"', None, "'tight'", "P % of AL"),
+    ("settle_band = true", None, "True", "number"),
+    ("settle_band = 0.001\nband = 0.002", None, "0.001", "not both"),
+    ('settle_band = "1 % of AL"', None, "'1 % of AL'", "AL"),   # GOOD compares JL and DJL only
+    ('settle_band = "paper"', '["AL", "JL"]', "'paper'", "DJL"),
+])
+def test_bad_settle_band_names_the_key(tmp_path, line, profiles, value, words):
+    path = write(tmp_path, _with_settle(line, profiles))
+    with pytest.raises(ScenarioError) as ei:
+        load_scenario(path)
+    msg = str(ei.value)
+    assert str(path) in msg and "simulation.settle_band" in msg and value in msg, msg
+    assert words in msg, msg
+    assert ei.value.key == "simulation.settle_band"

@@ -131,3 +131,42 @@ def render_figures(jobs: Sequence[tuple[Callable[[], Any], Path]], written: list
             list(pool.map(_render, range(len(jobs))))
     finally:
         _FIGURE_JOBS.clear()
+
+
+_TASKS: list[Callable[[], Any]] = []
+
+
+def _call(i: int) -> tuple[bool, Any]:
+    try:
+        return True, _TASKS[i]()
+    except Exception as e:  # noqa: BLE001 - sent back as text: exceptions may not pickle
+        return False, f"{type(e).__name__}: {e}" if str(e) else type(e).__name__
+
+
+def run_forked(tasks: Sequence[Callable[[], Any]], workers: int | None = None
+               ) -> list[tuple[bool, Any]]:
+    """Run independent tasks on all cores (forked workers); return (ok, result or message).
+
+    The tasks are closures inherited by the forked workers (nothing but the
+    results is pickled); an exception comes back as ``(False, "Type: message")``.
+    Where ``fork`` is not available, or for a single task, they run here.
+    """
+    import multiprocessing
+    import os
+
+    tasks = list(tasks)
+    n = min(len(tasks), workers or os.cpu_count() or 1)
+    if n <= 1 or "fork" not in multiprocessing.get_all_start_methods():
+        _TASKS[:] = tasks
+        try:
+            return [_call(i) for i in range(len(tasks))]
+        finally:
+            _TASKS.clear()
+    from concurrent.futures import ProcessPoolExecutor
+
+    _TASKS[:] = tasks
+    try:
+        with ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("fork")) as pool:
+            return list(pool.map(_call, range(len(tasks))))
+    finally:
+        _TASKS.clear()

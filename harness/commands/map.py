@@ -1,0 +1,152 @@
+"""``djl-fmu map``: AL / JL / DJL over a grid of moves, on all cores or on a Dask cluster."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+DESCRIPTION = """\
+Map the workspace: run every move of a grid and measure, for each compared
+profile (AL, JL, DJL), the residual vibration, the motion time and the
+settling time, exactly as 'djl-fmu simulate' does for one move (JL tuned to
+the period at the end of the motion, DJL to the period at the start of each
+constant-jerk stage).
+
+The grid is every combination of Z start positions, Z travels, move lengths
+and velocity limits, given by the [map] table of the scenario (format:
+docs/map.md); the embedded scenarios X and Y have a default grid of 10,000
+moves (z0 0..0.1 m, Z travel 0.025..0.5 m, move 0.02..0.5 m, v_max 0.25..2 m/s).
+Moves are numbered in grid order: z0, then Z travel, then move length, then
+v_max (varying fastest); --max-moves N runs the first N.
+
+The moves run in batches on a pool of processes, one per core by default
+(--workers N), or on the workers of a running Dask cluster (--scheduler
+ADDRESS). The results do not depend on where they ran: the CSV is identical
+for any number of workers and on a cluster.
+
+Outputs, in --out (default ./djl-fmu-out/map), written only once every move
+has succeeded:
+  <name>-map.csv        one row per move and profile: the columns of the sweep CSV of
+                        'djl-fmu simulate', plus move_index (0-based, grid order)
+  <name>-map.png        heat map of the residual vibration of DJL against JL, % change,
+                        over (move length, Z travel), one panel per z0 and v_max
+  <name>-map-*.png      residual of each profile as % of AL, settling time DJL vs JL
+  summary.txt           moves, time per move, workers, median and max residuals
+
+Running on a Dask cluster:
+  dask scheduler                               # prints its address, tcp://HOST:8786
+  dask worker tcp://HOST:8786 --nworkers 4 --nthreads 1   # on every machine (4 cores)
+  djl-fmu map X --scheduler tcp://HOST:8786
+Every worker needs this package installed (pip install djl-fmu, same version);
+with --engine fmu and a scenario that names its own FMU file, the file must
+exist at the same path on the workers.
+"""
+
+EPILOG = """\
+examples:
+  djl-fmu map X                                the 10,000-move map of scenario X, all cores
+  djl-fmu map Y --max-moves 500 --workers 2    the first 500 moves, on 2 processes
+  djl-fmu map my_axis.toml --scheduler tcp://10.0.0.5:8786
+  djl-fmu map X --engine fmu --max-moves 20    through the generator FMUs (slower)
+
+Exit status: 0 on success, 2 for a bad scenario or option, or an unreachable
+scheduler (nothing simulated, nothing written), 1 if a move fails.
+"""
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``map`` command."""
+    p = sub.add_parser(
+        "map",
+        help="AL/JL/DJL over a grid of moves (residual, settling, motion time): CSV and "
+             "heat maps, on all cores or a Dask cluster",
+        description=DESCRIPTION,
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("scenario", metavar="SCENARIO",
+                   help="TOML scenario file with a [map] table, or an embedded scenario "
+                        "name (X, Y)")
+    p.add_argument("-o", "--out", type=Path, default=Path("djl-fmu-out") / "map",
+                   metavar="DIR", help="output folder (default: ./djl-fmu-out/map)")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="local worker processes (default: one per core; 1 runs in this "
+                        "process)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run on a Dask cluster: the scheduler's address, e.g. "
+                        "tcp://10.0.0.5:8786")
+    p.add_argument("--max-moves", type=int, default=None, metavar="N",
+                   help="run only the first N moves of the grid")
+    p.add_argument("--engine", choices=("fast", "fmu"), default="fast",
+                   help="evaluation engine: 'fast' (compiled, default) or 'fmu' (the "
+                        "generator FMUs through fmpy)")
+    p.add_argument("--no-plot", action="store_true", help="do not write the PNG heat maps")
+    p.add_argument("-q", "--quiet", action="store_true",
+                   help="no progress bar, do not print the summary")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Check the inputs, run the map, then write the outputs; return the exit status."""
+    from ._common import CommandError
+
+    try:
+        return _run(args)
+    except CommandError as e:
+        print(f"djl-fmu map: {e}", file=sys.stderr)
+        return e.status
+
+
+def _run(args: argparse.Namespace) -> int:
+    from ..executors import ExecutorError, make_executor
+    from ..fmu.runner import FMUError
+    from ..workspace import MapError, check_engine, run_map
+    from ._common import CommandError, load_scenarios, report_written, write_outputs
+
+    # 1. check everything before running anything
+    if args.workers is not None and args.workers < 1:
+        raise CommandError(2, f"--workers must be >= 1, got {args.workers}")
+    if args.max_moves is not None and args.max_moves < 1:
+        raise CommandError(2, f"--max-moves must be >= 1, got {args.max_moves}")
+    if args.workers is not None and args.scheduler is not None:
+        raise CommandError(2, "give --workers or --scheduler, not both (on a Dask cluster "
+                              "the cluster's workers run the moves)")
+    (sc,), (stem,) = load_scenarios([args.scenario], None, None, args.out)
+    if sc.map is None:
+        raise CommandError(2, f"scenario {sc.name} ({sc.source}) has no [map] table: add one "
+                              f"(format: docs/map.md), or use the embedded X or Y")
+    try:
+        check_engine(args.engine, sc)
+    except ValueError as e:
+        raise CommandError(2, f"--engine {args.engine}: {e}") from None
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from ..results import save_figure
+
+    # 2. run (nothing is written yet); the executor is set up first, so that a bad
+    #    scheduler address is reported as a bad option
+    try:
+        with make_executor(args.workers, args.scheduler) as ex:
+            try:
+                res = run_map(sc, engine=args.engine, max_moves=args.max_moves,
+                              progress=not args.quiet, executor=ex)
+            except (MapError, FMUError, ValueError, OSError) as e:
+                raise CommandError(1, f"map failed ({sc.name}): {e}") from None
+    except ExecutorError as e:
+        raise CommandError(2, str(e)) from None
+    summary = res.table()
+
+    # 3. write everything, or nothing
+    def write(written: list[Path]) -> None:
+        written.append(res.to_csv(args.out / f"{stem}-map.csv"))
+        if not args.no_plot:
+            for i, (name, fig) in enumerate(res.figures().items()):
+                fname = f"{stem}-map.png" if i == 0 else f"{stem}-map-{name}.png"
+                written.append(save_figure(fig, args.out / fname))
+
+    written = write_outputs(args.out, write, summary)
+    report_written(args.out, written, summary, args.quiet)
+    return 0

@@ -1,0 +1,280 @@
+"""One executor interface for all the cores of this machine or a Dask cluster.
+
+:func:`make_executor` is a context manager yielding a
+:class:`concurrent.futures.Executor`:
+
+* ``workers=1`` (no scheduler): :class:`SerialExecutor`, every task run in
+  this process when it is submitted;
+* otherwise a :class:`~concurrent.futures.ProcessPoolExecutor` with ``workers``
+  processes (default: every core, :func:`os.cpu_count`);
+* ``scheduler="tcp://host:8786"``: the workers of an existing Dask cluster,
+  through ``distributed.Client(address).get_executor()``.
+
+The callers (:func:`harness.workspace.run_map`) submit top-level functions and
+collect :class:`concurrent.futures.Future` objects, so one code path serves
+the three cases.
+
+Examples
+--------
+>>> from harness.executors import make_executor
+>>> with make_executor(workers=2) as ex:            # doctest: +SKIP
+...     print(ex.submit(pow, 2, 10).result())
+1024
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterator
+from concurrent.futures import Executor, Future, ProcessPoolExecutor
+from contextlib import contextmanager
+from typing import Any
+
+__all__ = [
+    "CONNECT_TIMEOUT",
+    "ExecutorError",
+    "SerialExecutor",
+    "executor_workers",
+    "make_executor",
+]
+
+CONNECT_TIMEOUT = 10.0
+"""Seconds allowed to reach a Dask scheduler and to find a worker on it."""
+
+
+class ExecutorError(ValueError):
+    """The executor cannot be set up: bad worker count, unreachable Dask scheduler."""
+
+
+class SerialExecutor(Executor):
+    """Run every task in this process, when it is submitted (``workers=1``).
+
+    The returned futures are already done; an exception raised by the task is
+    stored in its future, as a process pool would.
+    """
+
+    def __init__(self) -> None:
+        self._shutdown = False
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> Future:
+        """Run ``fn(*args, **kwargs)`` now; return its (done) future."""
+        if self._shutdown:
+            raise RuntimeError("cannot schedule new futures after shutdown")
+        fut: Future = Future()
+        fut.set_running_or_notify_cancel()
+        try:
+            fut.set_result(fn(*args, **kwargs))
+        except BaseException as e:  # noqa: BLE001 (stored, as a pool would)
+            if isinstance(e, (KeyboardInterrupt, SystemExit)):
+                raise
+            fut.set_exception(e)
+        return fut
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        """Refuse further tasks (nothing runs in the background)."""
+        self._shutdown = True
+
+    @property
+    def n_workers(self) -> int:
+        """Number of workers: 1."""
+        return 1
+
+
+class _ProcessPool(ProcessPoolExecutor):
+    """A process pool that says how many processes it has."""
+
+    def __init__(self, max_workers: int) -> None:
+        super().__init__(max_workers=max_workers)
+        self._n = max_workers
+
+    @property
+    def n_workers(self) -> int:
+        """Number of worker processes."""
+        return self._n
+
+
+def executor_workers(executor: Executor) -> int:
+    """Return the number of tasks an executor runs at once.
+
+    Parameters
+    ----------
+    executor : Executor
+        From :func:`make_executor`, a :class:`~concurrent.futures.ProcessPoolExecutor`,
+        a :class:`~concurrent.futures.ThreadPoolExecutor` or a Dask ``ClientExecutor``.
+
+    Returns
+    -------
+    int
+        The worker count (the sum of the worker threads on a Dask cluster; 0
+        if unknown).
+    """
+    n = getattr(executor, "n_workers", None)
+    if isinstance(n, int):
+        return n
+    client = getattr(executor, "_client", None)  # distributed.cfexecutor.ClientExecutor
+    if client is not None:
+        try:
+            info = client.scheduler_info()
+            return int(sum(w.get("nthreads", 1) for w in info.get("workers", {}).values()))
+        except Exception:  # noqa: BLE001 (a count for reports only)
+            return 0
+    return int(getattr(executor, "_max_workers", 0) or 0)
+
+
+def check_workers(workers: int | None) -> int:
+    """Return the worker count to use (``None``: every core); refuse one below 1.
+
+    Raises
+    ------
+    ExecutorError
+        If ``workers`` is not an integer >= 1.
+    """
+    if workers is None:
+        return os.cpu_count() or 1
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ExecutorError(f"the number of workers must be an integer >= 1, got {workers!r}")
+    return workers
+
+
+@contextmanager
+def make_executor(workers: int | None = None, scheduler: str | None = None, *,
+                  timeout: float | None = None) -> Iterator[Executor]:
+    """Executor on the local cores or on a Dask cluster, closed at exit.
+
+    Parameters
+    ----------
+    workers : int, optional
+        Local worker processes (default: :func:`os.cpu_count`); 1 runs every
+        task in this process (:class:`SerialExecutor`).  Not used with
+        ``scheduler`` (the cluster's workers run the tasks).
+    scheduler : str, optional
+        Address of a running Dask scheduler, e.g. ``tcp://10.0.0.5:8786``
+        (``dask scheduler`` prints it; start workers with ``dask worker ADDRESS``).
+    timeout : float, optional
+        Seconds to reach the scheduler, and then to find at least one worker
+        (default :data:`CONNECT_TIMEOUT`).
+
+    Yields
+    ------
+    Executor
+        ``submit`` returns :class:`concurrent.futures.Future` objects;
+        :func:`executor_workers` tells how many run at once.
+
+    Raises
+    ------
+    ExecutorError
+        For a bad worker count, both ``workers`` and ``scheduler``, a scheduler
+        that cannot be reached within ``timeout`` (the message gives the
+        address) or a cluster without workers.
+    """
+    if scheduler is None:
+        n = check_workers(workers)
+        ex: Executor = SerialExecutor() if n == 1 else _ProcessPool(n)
+        ok = False
+        try:
+            yield ex
+            ok = True
+        finally:
+            # on an error or an interrupt, drop the queued tasks and do not wait
+            ex.shutdown(wait=ok, cancel_futures=not ok)
+        return
+    if workers is not None:
+        raise ExecutorError("give either a number of local workers or a Dask scheduler, not "
+                            "both (the cluster's workers run the tasks)")
+    client = connect(scheduler, timeout=CONNECT_TIMEOUT if timeout is None else timeout)
+    try:
+        cex = client.get_executor(pure=False)
+        try:
+            yield cex
+        finally:
+            cex.shutdown(wait=False)
+    finally:
+        client.close()
+
+
+def connect(address: str, *, timeout: float | None = None) -> Any:
+    """Connect to a Dask scheduler that has at least one worker.
+
+    Parameters
+    ----------
+    address : str
+        Scheduler address, e.g. ``tcp://host:8786`` (``host:8786`` works too).
+    timeout : float, optional
+        Seconds to reach it, and then to find a worker (default
+        :data:`CONNECT_TIMEOUT`).
+
+    Returns
+    -------
+    distributed.Client
+
+    Raises
+    ------
+    ExecutorError
+        If the scheduler cannot be reached, or has no worker, within ``timeout``.
+    """
+    timeout = CONNECT_TIMEOUT if timeout is None else float(timeout)
+    if not isinstance(address, str) or not address.strip():
+        raise ExecutorError(f"bad Dask scheduler address {address!r} (e.g. tcp://host:8786)")
+    try:
+        from distributed import Client
+    except ImportError as e:  # pragma: no cover (a dependency of the package)
+        raise ExecutorError(f"cannot use the Dask scheduler {address}: dask.distributed is "
+                            f"not installed ({e})") from None
+    what = _probe(address, timeout)
+    if what != "Scheduler":
+        raise ExecutorError(f"{address} is a Dask {what}, not a scheduler: give the address "
+                            f"'dask scheduler' prints (e.g. tcp://host:8786)")
+    try:
+        client = Client(address, timeout=timeout, set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as e:
+        raise ExecutorError(f"cannot connect to the Dask scheduler at {address}: "
+                            f"{_first_line(e)}") from None
+    try:
+        client.wait_for_workers(1, timeout=timeout)
+    except (OSError, TimeoutError) as e:
+        client.close()
+        raise ExecutorError(f"the Dask scheduler at {address} has no worker after "
+                            f"{timeout:g} s ({type(e).__name__}); start some with "
+                            f"'dask worker {address}'") from None
+    return client
+
+
+def _first_line(e: BaseException) -> str:
+    text = str(e).strip()
+    return text.splitlines()[0] if text else type(e).__name__
+
+
+def _probe(address: str, timeout: float) -> str:
+    """Ask the server at ``address`` what it is (``"Scheduler"``, ``"Worker"``...).
+
+    The handshake runs in its own thread and event loop, bounded by ``timeout``:
+    ``distributed.Client`` can wait forever on a port that accepts connections
+    but never answers.
+    """
+    import asyncio
+    from concurrent.futures import ThreadPoolExecutor
+
+    async def identity() -> Any:
+        from distributed.core import rpc
+
+        async with rpc(address, timeout=timeout) as r:
+            return await r.identity()
+
+    def run() -> Any:
+        # distributed's own connect timeout says why (refused, unknown host) when it
+        # fires; this one is for a server that accepts but does not answer
+        return asyncio.run(asyncio.wait_for(identity(), timeout + 2.0))
+
+    pool = ThreadPoolExecutor(1)
+    try:
+        info = pool.submit(run).result(timeout + 10.0)
+    except (OSError, TimeoutError, ValueError, TypeError) as e:
+        raise ExecutorError(f"cannot reach the Dask scheduler at {address} within "
+                            f"{timeout:g} s ({_first_line(e)}); start one with 'dask "
+                            f"scheduler' and give the address it prints") from None
+    except Exception as e:  # noqa: BLE001 (a server that is not Dask)
+        raise ExecutorError(f"no Dask scheduler answers at {address} "
+                            f"({type(e).__name__}: {_first_line(e)})") from None
+    finally:
+        pool.shutdown(wait=False)
+    return str(info.get("type", "server")) if isinstance(info, dict) else "server"
