@@ -537,7 +537,11 @@ def run_scenario(scenario: Scenario | str | Path, *, fmu: str | Path | None = No
         session = Session(sc.simulation.fmu, sc.simulation.fmi_version, engine=engine)
     if robustness == "auto":
         robustness = "worst" if sc.is_sweep else "curves"
-    rsession = session if session.engine == "fast" or not robustness else Session(engine="fast")
+    # the many map-error runs go to the fast engine (same results), unless the scenario names
+    # its own FMU file: its generator may differ from the package's, so it runs them itself
+    own_fmu = session.fmu is not None or sc.simulation.fmu is not None
+    rsession = (session if session.engine == "fast" or not robustness or own_fmu
+                else Session(engine="fast"))
     try:
         if not sc.is_sweep:
             return run_case(sc, session, robustness=robustness, robustness_session=rsession)

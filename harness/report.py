@@ -180,7 +180,8 @@ def peers_section(settings: Settings,
         "shapers convolved with the AL profile and the damped-jerk law (Béarée 2014 §4.2), "
         "all tuned to the mode at the end of the motion, on the harness's default scenarios. "
         "Motion time is also given relative to the time-optimal JL with the same limits; "
-        "residual in % of AL; settling into the paper's band (the largest residual of DJL). "
+        "residual (free-oscillation amplitude at the end) in % of AL; settling into the "
+        "scenario's band, shared by every method (default: 1 % of AL's residual). "
         "The figures show the residual against an error on the mode frequency (stationary "
         "mode). Same as <code>djl-fmu compare</code>; details in docs/peers.md.</p>",
     ]

@@ -60,9 +60,20 @@ def test_run_writes_table_csv_and_plot(tmp_path, capsys, fmu2):
     assert rc == 0
     text = capsys.readouterr().out
     assert "Residual vibration [mm]" in text and "DJL compared with JL" in text
-    assert sorted(p.name for p in out.iterdir()) == ["cli-test.csv", "cli-test.png",
-                                                     "summary.txt"]
+    assert sorted(p.name for p in out.iterdir()) == [
+        "cli-test-robustness.csv", "cli-test-robustness.png", "cli-test.csv", "cli-test.png",
+        "summary.txt"]
     rows = list(csv.DictReader((out / "cli-test.csv").open()))
+    # the robustness curves pass through the nominal residual at e = 0 and their worst case
+    # over +/-10 % is the CSV's
+    rob = list(csv.DictReader((out / "cli-test-robustness.csv").open()))
+    for r in rows:
+        mine = [x for x in rob if x["profile"] == r["profile"]]
+        assert len(mine) == 41
+        nominal = [float(x["residual_m"]) for x in mine if abs(float(x["map_error"])) < 1e-12]
+        assert nominal == [pytest.approx(float(r["residual_m"]), rel=1e-9)]
+        worst = max(float(x["residual_m"]) for x in mine if abs(float(x["map_error"])) <= 0.1001)
+        assert worst == pytest.approx(float(r["residual_worst_map10_m"]), rel=1e-9)
     assert [r["profile"] for r in rows] == ["AL", "JL", "DJL"]
     assert float(rows[0]["residual_pct_of_AL"]) == pytest.approx(100.0)
     assert (out / "cli-test.png").read_bytes()[:4] == b"\x89PNG"

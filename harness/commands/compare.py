@@ -24,9 +24,11 @@ final Z position and its damping):
                     (Bearee 2014, 4.2)
 
 Per scenario: motion time and its ratio to the time-optimal JL, residual
-vibration (peak |deflection| after the reference ends) and % of AL, settling
-time into the band of the scenario (default: the largest residual of DJL), and
-the residual against the mode-frequency error on a stationary mode (robustness).
+vibration (free-oscillation amplitude when the reference ends) and % of AL,
+settling time into the band of the scenario (default: 1 % of AL's residual,
+shared by every method), and the residual against the mode-frequency error on
+a stationary mode (robustness of the peers tuned to that mode; the time-varying
+robustness of JL and DJL to a map error is in `djl-fmu simulate`).
 Each scenario also runs as a stationary variant (Z still at its final
 position), unless --no-stationary.  With --timeopt N (default 30), random moves
 measure how much slower than time-optimal the FIR-built JL and DJL are (per

@@ -436,7 +436,7 @@ class PeerComparison:
                 f"{r['v_peak_over_v_max']:>9.2f}{r['a_peak_over_a_max']:>9.2f}")
         lines.append("")
         lines.append(f"Settling band +/-{self.band * 1e3:.3g} mm ({self.band_source}); "
-                     "residual: peak |deflection| after the reference ends.")
+                     "residual: free-oscillation amplitude when the reference ends.")
         for mo in self.methods.values():
             if mo.name not in BASE:
                 lines.append(f"  {mo.name}: {mo.tuned_to}")
