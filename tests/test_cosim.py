@@ -225,7 +225,11 @@ def test_run_scenario_is_one_call_and_its_metrics_are_right(tmp_path, fmu2):
                 "Settling time [s] (band: 1 % of AL's residual)",
                 "Settling time [s] (the paper's band: DJL's residual)"):
         assert row in text
-    assert "Worst residual" not in text  # not computed by default
+    # run_scenario computes the map-error curves of a single move by default
+    assert "Worst residual, map error +/-10 %" in text
+    for n, p in res.profiles.items():
+        assert p.worst_residual_10pct == pytest.approx(res.robustness.worst()[n], rel=1e-12)
+        assert p.worst_residual_10pct >= p.metrics.residual
     path = res.to_csv(tmp_path / "x.csv")
     lines = path.read_text().splitlines()
     assert len(lines) == 4 and lines[0].startswith("scenario,profile")
