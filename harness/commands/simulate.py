@@ -99,7 +99,6 @@ def _run(args: argparse.Namespace) -> int:
     from ._common import (
         CommandError,
         load_scenarios,
-        render_figures,
         report_written,
         run_forked,
         write_outputs,
@@ -118,46 +117,72 @@ def _run(args: argparse.Namespace) -> int:
     import matplotlib
 
     matplotlib.use("Agg")
-    from ..cosim import run_scenario
+    # the scenarios are independent: each is run, and its figures drawn into a staging folder,
+    # by a forked worker (all cores); nothing is written in --out before they all succeeded
+    import shutil
+    import tempfile
+
+    from ..cosim import run_scenario  # noqa: F401 - imported once, before the workers fork
     from ..results import SweepResult, format_table2, table2_rows, write_csv
 
-    # the scenarios are independent: on all cores (forked workers), in order
     progress = not args.quiet and len(scenarios) == 1
-    outcomes = run_forked([functools.partial(run_scenario, sc, progress=progress,
-                                             engine=args.engine) for sc in scenarios])
-    results = []
-    for sc, (ok, value) in zip(scenarios, outcomes, strict=True):
-        if not ok:
-            raise CommandError(1, f"simulation failed ({sc.name}): {value}")
-        results.append(value)
+    staging = Path(tempfile.mkdtemp(prefix="djl-fmu-simulate-"))
+    try:
+        outcomes = run_forked([functools.partial(_scenario_task, sc, stem, staging, progress,
+                                                 args.engine, not args.no_plot)
+                               for sc, stem in zip(scenarios, stems, strict=True)])
+        results, figures = [], []
+        for sc, (ok, value) in zip(scenarios, outcomes, strict=True):
+            if not ok:
+                raise CommandError(1, f"simulation failed ({sc.name}): {value}")
+            results.append(value[0])
+            figures += value[1]
 
-    texts = [r.table() for r in results if not isinstance(r, SweepResult)]
-    sweeps = [r for r in results if isinstance(r, SweepResult)]
-    if sweeps:
-        texts.append(format_table2(sweeps))
-    summary = "\n\n".join(texts)
-
-    # 3. write everything, or nothing
-    def write(written: list[Path]) -> None:
-        figures = []
-        for stem, r in zip(stems, results, strict=True):
-            written.append(r.to_csv(args.out / f"{stem}.csv"))
-            rob = getattr(r, "robustness", None)
-            if rob is not None:
-                written.append(write_csv(args.out / f"{stem}-robustness.csv", rob.rows()))
-            if not args.no_plot:
-                figures.append((r.plot, args.out / f"{stem}.png"))
-                if rob is not None:
-                    figures.append((rob.plot, args.out / f"{stem}-robustness.png"))
-        render_figures(figures, written)
+        texts = [r.table() for r in results if not isinstance(r, SweepResult)]
+        sweeps = [r for r in results if isinstance(r, SweepResult)]
         if sweeps:
-            written.append(write_csv(args.out / "table2.csv", table2_rows(sweeps)))
-        if not args.scenarios and not args.no_fmus:
-            _write_fmus(args.out, written)
+            texts.append(format_table2(sweeps))
+        summary = "\n\n".join(texts)
 
-    written = write_outputs(args.out, write, summary)
+        # 3. write everything, or nothing
+        def write(written: list[Path]) -> None:
+            for stem, r in zip(stems, results, strict=True):
+                written.append(r.to_csv(args.out / f"{stem}.csv"))
+                rob = getattr(r, "robustness", None)
+                if rob is not None:
+                    written.append(write_csv(args.out / f"{stem}-robustness.csv", rob.rows()))
+            for name in figures:
+                dest = args.out / name
+                tmp = args.out / f".{name}.tmp"
+                shutil.copyfile(staging / name, tmp)
+                tmp.replace(dest)
+                written.append(dest)
+            if sweeps:
+                written.append(write_csv(args.out / "table2.csv", table2_rows(sweeps)))
+            if not args.scenarios and not args.no_fmus:
+                _write_fmus(args.out, written)
+
+        written = write_outputs(args.out, write, summary)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
     report_written(args.out, written, summary, args.quiet)
     return 0
+
+
+def _scenario_task(sc, stem: str, staging: Path, progress: bool, engine: str | None,
+                   plot: bool) -> tuple[object, list[str]]:
+    """Run one scenario and draw its figures into ``staging``; return it and their names."""
+    from ..cosim import run_scenario
+    from ..results import save_figure
+
+    r = run_scenario(sc, progress=progress, engine=engine)
+    names = []
+    if plot:
+        names.append(save_figure(r.plot(), staging / f"{stem}.png").name)
+        rob = getattr(r, "robustness", None)
+        if rob is not None:
+            names.append(save_figure(rob.plot(), staging / f"{stem}-robustness.png").name)
+    return r, names
 
 
 def _write_fmus(out: Path, written: list[Path]) -> None:
