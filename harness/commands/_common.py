@@ -90,49 +90,6 @@ def report_written(out: Path, written: Sequence[Path], summary: str, quiet: bool
     print(f"wrote {len(written)} files in {out}/: " + ", ".join(p.name for p in written))
 
 
-_FIGURE_JOBS: list[tuple[Callable[[], Any], Path]] = []
-
-
-def _render(i: int) -> str:
-    from ..results import save_figure
-
-    make, path = _FIGURE_JOBS[i]
-    return str(save_figure(make(), path))
-
-
-def render_figures(jobs: Sequence[tuple[Callable[[], Any], Path]], written: list[Path],
-                   workers: int | None = None) -> None:
-    """Draw and save figures, on all cores where the platform can fork.
-
-    Each job is ``(make_figure, path)``.  Drawing is matplotlib's slowest part
-    of a run (about a second per large figure); figures are independent, so
-    they are drawn by forked processes that inherit the results (nothing is
-    pickled).  Where ``fork`` is not available, or for a single figure, they
-    are drawn here, one after the other.  Every path is added to ``written``
-    before drawing starts, so that a failure removes what was written.
-    """
-    import multiprocessing
-    import os
-
-    jobs = list(jobs)
-    written.extend(p for _, p in jobs)
-    n = min(len(jobs), workers or os.cpu_count() or 1)
-    if n <= 1 or "fork" not in multiprocessing.get_all_start_methods():
-        from ..results import save_figure
-
-        for make, path in jobs:
-            save_figure(make(), path)
-        return
-    from concurrent.futures import ProcessPoolExecutor
-
-    _FIGURE_JOBS[:] = jobs
-    try:
-        with ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("fork")) as pool:
-            list(pool.map(_render, range(len(jobs))))
-    finally:
-        _FIGURE_JOBS.clear()
-
-
 _TASKS: list[Callable[[], Any]] = []
 
 
