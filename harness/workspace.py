@@ -137,12 +137,18 @@ class BatchResult:
         Time the worker spent on the batch (s).
     worker : str
         ``host:pid`` of the worker.
+    keys : list
+        For each move, the moves planned for JL and DJL (every profile when
+        one of them is not run), exactly
+        (:meth:`harness.results.ScenarioResult.move_key`): equal keys are the
+        same move.
     """
 
     start: int
     rows: list[list[dict[str, Any]]]
     busy_time: float
     worker: str
+    keys: list[Any] = field(default_factory=list)
 
 
 def run_batch(scenario: Scenario, engine: str, start: int, points: Sequence[Point]
@@ -170,11 +176,13 @@ def run_batch(scenario: Scenario, engine: str, start: int, points: Sequence[Poin
         If a move fails; the message names it (grid index and values).
     """
     from .evaluation import run_case
-    from .results import SweepResult
+    from .results import TABLE2_PROFILES, SweepResult
 
     t0 = time.perf_counter()
     session = _worker_session(engine, scenario)
     out = []
+    keys = []
+    compared = TABLE2_PROFILES if set(TABLE2_PROFILES) <= set(scenario.compare.profiles) else None
     for k, p in enumerate(points):
         case = scenario.map_case(*p)
         try:
@@ -188,8 +196,9 @@ def run_batch(scenario: Scenario, engine: str, start: int, points: Sequence[Poin
         for r in rows:
             r["move_index"] = start + k
         out.append(rows)
+        keys.append(res.move_key(compared))
     return BatchResult(start, out, time.perf_counter() - t0,
-                       f"{socket.gethostname()}:{os.getpid()}")
+                       f"{socket.gethostname()}:{os.getpid()}", keys)
 
 
 # ------------------------------------------------------------ the map side
@@ -327,6 +336,7 @@ def _run_on(sc: Scenario, engine: str, points: list[Point], bs: int, ex: Executo
     from .executors import SerialExecutor
 
     rows: list[list[dict[str, Any]] | None] = [None] * len(points)
+    keys: list[Any] = [None] * len(points)
     busy, seen = 0.0, set()
     bar = _progress_bar(len(points), progress, f"map {sc.name}")
     serial = isinstance(ex, SerialExecutor)
@@ -346,6 +356,7 @@ def _run_on(sc: Scenario, engine: str, points: list[Point], bs: int, ex: Executo
             raise MapError(f"a batch of moves failed: {type(e).__name__}: {e}{hint}"
                            ) from None
         rows[br.start:br.start + len(br.rows)] = br.rows
+        keys[br.start:br.start + len(br.keys)] = br.keys
         busy += br.busy_time
         seen.add(br.worker)
         if bar is not None:
@@ -373,9 +384,24 @@ def _run_on(sc: Scenario, engine: str, points: list[Point], bs: int, ex: Executo
             close_worker_session()
     wall = time.perf_counter() - t0
     assert all(r is not None for r in rows)
+    _mark_duplicates(rows, keys)
     return MapResult(sc, points, [r for r in rows if r is not None], engine=engine,
                      workers=n_workers, wall_time=wall, busy_time=busy, batch=bs,
                      executor=where, worker_ids=sorted(seen))
+
+
+def _mark_duplicates(move_rows: list[Any], keys: list[Any]) -> None:
+    """Fill ``duplicate_of`` (the first move, in grid order, that plans the same moves)."""
+    first: dict[Any, int] = {}
+    for i, k in enumerate(keys):
+        if k is None:
+            continue
+        if k in first:
+            name = move_rows[first[k]][0]["scenario"]
+            for r in move_rows[i]:
+                r["duplicate_of"] = name
+        else:
+            first[k] = i
 
 
 # ------------------------------------------------------------------ results
@@ -434,6 +460,17 @@ class MapResult:
     def n_moves(self) -> int:
         """Number of moves run."""
         return len(self.points)
+
+    @property
+    def distinct(self) -> np.ndarray:
+        """Boolean mask of the moves counted in statistics (not a duplicate of an earlier one).
+
+        Two moves are duplicates when they plan exactly the same JL and DJL
+        moves (every profile's when one of them is not compared), e.g. a
+        v_max that neither reaches: see ``duplicate_of`` in the CSV.
+        """
+        return np.array([not rows[0].get("duplicate_of") for rows in self.move_rows],
+                        dtype=bool)
 
     @property
     def profiles(self) -> tuple[str, ...]:
@@ -531,14 +568,20 @@ class MapResult:
             out.append(f"  {'':<22}{'mean':>8}{'largest':>10}{'smallest':>10}{'std':>8}"
                        f"   DJL better")
             out.append(f"  {'':<22}{'':>8}{'reduction':>10}{'reduction':>10}")
+            keep = self.distinct
             for lab, col in (("residual vibration", "case_djl_vs_jl_residual_pct"),
                              ("settling time", "case_djl_vs_jl_settling_pct")):
-                ch = self.values(col)
+                ch = self.values(col)[keep]
                 st2 = table2_stats(ch)
                 better = (f"{np.mean(ch[np.isfinite(ch)] < 0) * 100.0:.0f} % of {st2.n} moves"
                           if st2.n else "n/a")
                 out.append(f"  {lab:<22}{st2.mean:>+8.1f}{st2.max:>+10.1f}{st2.min:>+10.1f}"
                            f"{st2.std:>8.1f}   {better}")
+            n_dup = int(np.sum(~keep))
+            out.append(f"  {int(np.sum(keep))} distinct moves counted"
+                       + (f" ({n_dup} duplicates merged: the same JL and DJL moves as an "
+                          f"earlier move of the grid, see duplicate_of in the CSV)"
+                          if n_dup else ""))
         return "\n".join(out)
 
     # -------------------------------------------------------------- plots

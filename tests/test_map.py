@@ -486,3 +486,31 @@ def test_cli_run_writes_csv_heat_maps_and_summary(tmp_path, capsys, serial):
                  "-o", str(out2), "--no-plot", "-q"]) == 0
     assert sorted(p.name for p in out2.iterdir()) == ["map-test-map.csv", "summary.txt"]
     assert "Map map-test" not in capsys.readouterr().out
+
+
+def test_duplicate_moves_are_marked_and_counted_once():
+    """v_max = 2 and 3 m/s are never reached on a 0.05 m move: JL and DJL plan the same moves,
+    so the second is marked a duplicate of the first and counted once; 0.3 m/s is reached on
+    a 0.4 m move, so that move differs from the 0.4 m move at 2 m/s."""
+    from harness.workspace import run_map
+
+    sc = _scenario(_with_map("[map]\ndistance = [0.05, 0.4]\nv_max = [2.0, 3.0, 0.3]\n"))
+    res = run_map(sc, engine=ENGINE, workers=1)
+    dup = [rows[0]["duplicate_of"] for rows in res.move_rows]
+    names = [rows[0]["scenario"] for rows in res.move_rows]
+
+    # independent expectation: the first earlier move whose JL and DJL results coincide
+    def sig(rows):
+        return tuple((r["profile"], r["residual_m"], r["motion_time_s"], r["T_F1_s"],
+                      r["T_F2_s"], r["T_F3_s"], r["T_F4_s"], r["settling_time_paper_band_s"])
+                     for r in rows if r["profile"] in ("JL", "DJL"))
+
+    sigs = [sig(rows) for rows in res.move_rows]
+    expected = [next((names[j] for j in range(i) if sigs[j] == sigs[i]), "")
+                for i in range(len(sigs))]
+    assert dup == expected
+    assert dup[1] == names[0]  # 0.05 m: v_max 3 = v_max 2
+    assert dup[3] == "" and dup[5] == ""  # 0.4 m at 2 m/s vs 0.3 m/s: different moves
+    assert res.distinct.tolist() == [not d for d in dup]
+    assert f"{sum(1 for d in dup if d)} duplicates merged" in res.table()
+    assert f"{sum(1 for d in dup if not d)} distinct moves counted" in res.table()
