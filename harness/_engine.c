@@ -256,11 +256,11 @@ static PyObject *engine_plan(PyObject *self, PyObject *args, PyObject *kwds)
     return (PyObject *)obj;
 }
 
-/* A writable C-contiguous float64 buffer of at least n elements. */
-static int get_out_buffer(PyObject *o, Py_buffer *view, Py_ssize_t n, const char *what)
+/* A C-contiguous float64 buffer of at least n elements (writable if asked). */
+static int get_buffer(PyObject *o, Py_buffer *view, Py_ssize_t n, const char *what, int writable)
 {
-    if (PyObject_GetBuffer(o, view, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0)
-        return -1;
+    int flags = PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | (writable ? PyBUF_WRITABLE : 0);
+    if (PyObject_GetBuffer(o, view, flags) < 0) return -1;
     if (view->itemsize != 8 || !view->format || strcmp(view->format, "d") != 0 ||
         view->len < n * 8) {
         PyErr_Format(PyExc_ValueError, "%s must be a C-contiguous float64 array of at least %zd "
@@ -271,18 +271,8 @@ static int get_out_buffer(PyObject *o, Py_buffer *view, Py_ssize_t n, const char
     return 0;
 }
 
-static int get_in_buffer(PyObject *o, Py_buffer *view, Py_ssize_t n, const char *what)
-{
-    if (PyObject_GetBuffer(o, view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) return -1;
-    if (view->itemsize != 8 || !view->format || strcmp(view->format, "d") != 0 ||
-        view->len < n * 8) {
-        PyErr_Format(PyExc_ValueError, "%s must be a C-contiguous float64 array of at least %zd "
-                     "values", what, n);
-        PyBuffer_Release(view);
-        return -1;
-    }
-    return 0;
-}
+#define get_out_buffer(o, view, n, what) get_buffer(o, view, n, what, 1)
+#define get_in_buffer(o, view, n, what) get_buffer(o, view, n, what, 0)
 
 #define N_SAMPLE_VARS 7
 

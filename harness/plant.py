@@ -231,18 +231,7 @@ def step_mode(
     tuple of float
         (ε, ε̇) at the end of the step.
     """
-    sig = zeta * omega
-    w2 = omega * omega
-    wd = omega * math.sqrt(1.0 - zeta * zeta)
-    e = math.exp(-sig * h)
-    c = math.cos(wd * h)
-    s = math.sin(wd * h) / wd
-    beta = -gain * (u1 - u0) / (h * w2)
-    alpha = (-gain * u0 - 2.0 * sig * beta) / w2
-    d1 = eps - alpha
-    d2 = deps - beta
-    return (alpha + beta * h + e * ((c + sig * s) * d1 + s * d2),
-            beta + e * (-w2 * s * d1 + (c - sig * s) * d2))
+    return step_mode_jerk(eps, deps, omega, zeta, gain, h, u0, (u1 - u0) / h)
 
 
 def step_mode_jerk(
@@ -583,19 +572,7 @@ class ScheduledPlant:
         z_mid : float
             Z position at mid-step (m), see :func:`hermite_mid`.
         """
-        st = self.state
-        total = 0.0
-        two_pi = 2.0 * math.pi
-        for i, law in enumerate(self._laws):
-            f = law(z_mid)
-            if not f > 0.0:
-                raise ValueError(f"mode {i}: frequency {f!r} Hz at z = {z_mid} m is not > 0")
-            e, de = step_mode(st[2 * i], st[2 * i + 1], two_pi * f, self._zeta[i],
-                              self._gain[i], h, u0, u1)
-            st[2 * i] = e
-            st[2 * i + 1] = de
-            total += e
-        return total
+        return self.step_jerk(h, u0, (u1 - u0) / h, z_mid)
 
     def step_jerk(self, h: float, u0: float, jerk: float, z_mid: float) -> float:
         """Advance all modes by ``h`` with the input u0 + jerk·τ; return Σε at the end.
