@@ -388,6 +388,9 @@ class Session:
         """Free both instances."""
         self.axis.close()
         self.z_axis.close()
+        fast = getattr(self, "_fast", None)
+        if fast is not None:
+            fast.close()
 
     def __enter__(self) -> Session:
         return self
@@ -445,15 +448,39 @@ class Session:
     # ------------------------------------------------------------- runs
 
     def tune(self, sc: Scenario, profile: str) -> TuningResult | None:
-        """Jerk times of ``profile`` from the mode map (None for AL or imposed ones)."""
-        mm, Te = sc.modemap, sc.simulation.Te
-        if profile == "JL" and sc.compare.JL_T_F is None:
-            return tune_jl(self.plan(sc, "JL"), mm.period, Te,
-                           mm.period(sc.z.z0 + sc.z.distance))
-        if profile == "DJL" and sc.compare.DJL_T_F is None:
-            return tune_djl(self.plan(sc, "DJL"), mm.period, Te, mm.period(sc.z.z0),
-                            rule=sc.compare.djl_rule)
+        """Jerk times of ``profile`` from the mode map (None for AL or imposed ones).
+
+        The method is the scenario's (``[compare]``): JL ``end`` (period at the
+        end of the motion) or ``optimal``; DJL ``paper`` (the period at the
+        start of each stage, rule ``djl_rule``), ``optimal`` or ``robust``
+        (:mod:`harness.optimize`, on the fast engine whatever this session's).
+        """
+        mm, Te, cmp = sc.modemap, sc.simulation.Te, sc.compare
+        if profile == "JL" and cmp.JL_T_F is None:
+            jl = tune_jl(self.plan(sc, "JL"), mm.period, Te, mm.period(sc.z.z0 + sc.z.distance))
+            if cmp.jl_tuning == "end":
+                return jl
+            return self._search(sc, "JL", cmp.jl_tuning, None, jl)
+        if profile == "DJL" and cmp.DJL_T_F is None:
+            paper = tune_djl(self.plan(sc, "DJL"), mm.period, Te, mm.period(sc.z.z0),
+                             rule=cmp.djl_rule)
+            if cmp.djl_tuning == "paper":
+                return paper
+            jl = tune_jl(self.plan(sc, "JL"), mm.period, Te, mm.period(sc.z.z0 + sc.z.distance))
+            return self._search(sc, "DJL", cmp.djl_tuning, paper, jl)
         return None
+
+    def _search(self, sc: Scenario, profile: str, method: str, paper: TuningResult | None,
+                jl: TuningResult) -> TuningResult:
+        from .optimize import tune_optimal
+
+        if self.engine == "fast":
+            fast = self
+        else:
+            fast = getattr(self, "_fast", None)
+            if fast is None:
+                fast = self._fast = Session(engine="fast")
+        return tune_optimal(sc, fast, profile, method, paper, jl, sc.compare.tuning_options())
 
     def _fast_map_error_residuals(self, sc: Scenario, profile: str,
                                   T_F: Sequence[float] | None,

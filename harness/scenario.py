@@ -54,7 +54,14 @@ Format (all lengths in m, times in s, frequencies in Hz)::
     [compare]                       # optional
     profiles = ["AL", "JL", "DJL"]
     tune_mode = 1                   # mode (1-based) the jerk times are tuned to
-    djl_rule = "start"              # "start" (paper) or "phase"
+    djl_rule = "start"              # the paper's rule: "start" (paper) or "phase"
+    djl_tuning = "paper"            # DJL jerk times: "paper" (the rule above), "optimal"
+                                    # (least residual), "robust" (least worst case)
+    jl_tuning = "end"               # JL jerk time: "end" (period at the end), "optimal"
+    map_error = 0.1                 # robust: the map f(z) off by up to +/-10 %
+    damping = [0.5, 1.0, 2.0]       # robust, optional: damping ratios x these factors
+    max_motion_time = "JL"          # optional: no longer than JL's motion (or a time in s)
+    period_band = 0.5               # jerk times within +/-50 % of the local periods
     JL_T_F = 0.15                   # optional: impose the JL jerk time
     DJL_T_F = [0.12, 0.13, 0.14, 0.15]   # optional: impose the DJL jerk times
 
@@ -91,6 +98,7 @@ else:  # pragma: no cover
 
 from .metrics import DEFAULT_SETTLE_BAND, SettleBand, parse_settle_band
 from .modemap import CantileverLaw, ConstantLaw, LinearLaw, ModeMap, ModeSpec, TableLaw
+from .optimize import DJL_METHODS, JL_METHODS
 from .tuning import RULES
 
 __all__ = [
@@ -209,6 +217,19 @@ class CompareSpec:
     djl_rule: str = "start"
     JL_T_F: float | None = None
     DJL_T_F: tuple[float, float, float, float] | None = None
+    djl_tuning: str = "paper"
+    jl_tuning: str = "end"
+    map_error: float = 0.1
+    damping: tuple[float, ...] | None = None
+    max_motion_time: float | str | None = None
+    period_band: float = 0.5
+
+    def tuning_options(self) -> Any:
+        """Return the :class:`harness.optimize.TuningOptions` of this table."""
+        from .optimize import TuningOptions
+
+        return TuningOptions(self.map_error, self.damping, self.max_motion_time,
+                             self.period_band)
 
 
 @dataclass(frozen=True)
@@ -635,8 +656,29 @@ def parse_scenario(data: Mapping[str, Any], source: str = "<string>",
     DJL_T_F = c.numbers("DJL_T_F", None, what="four DJL jerk times in s", min_len=4)
     if DJL_T_F is not None and (len(DJL_T_F) != 4 or not all(x > 0 for x in DJL_T_F)):
         raise c.err("DJL_T_F", list(DJL_T_F), "must hold four jerk times > 0 s")
+    djl_tuning = c.string("djl_tuning", "paper", choices=DJL_METHODS)
+    jl_tuning = c.string("jl_tuning", "end", choices=JL_METHODS)
+    map_error = c.number("map_error", 0.1, nonneg=True, what="relative map error, e.g. 0.1")
+    if not map_error < 1.0:
+        raise c.err("map_error", map_error, "must be < 1 (a relative error of the map)")
+    damping = c.numbers("damping", None, what="damping factors, e.g. [0.5, 1.0, 2.0]")
+    if damping is not None and not all(x > 0 for x in damping):
+        raise c.err("damping", list(damping), "damping factors must be > 0")
+    mmt_raw = c.raw("max_motion_time", None)
+    max_motion_time: float | str | None = None
+    if mmt_raw is not None:
+        if mmt_raw == "JL":
+            max_motion_time = "JL"
+        else:
+            max_motion_time = c.number("max_motion_time", positive=True,
+                                       what="a bound in s, or \"JL\"")
+    period_band = c.number("period_band", 0.5, positive=True,
+                           what="band around the local periods, a fraction")
+    if period_band > 10.0:
+        raise c.err("period_band", period_band, "must be <= 10")
     c.finish()
-    compare = CompareSpec(tuple(profiles), djl_rule, JL_T_F, DJL_T_F)
+    compare = CompareSpec(tuple(profiles), djl_rule, JL_T_F, DJL_T_F, djl_tuning, jl_tuning,
+                          map_error, damping, max_motion_time, period_band)
 
     # [sweep]
     sweep = None

@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 from .planner import MoveSamples, stage_starts
 
@@ -71,6 +72,9 @@ class TuningResult:
         Jerk times (samples) planned at each iteration, the last one included.
     converged : bool
         The last plan reproduced its own jerk times.
+    search : harness.optimize.SearchReport, optional
+        For the ``optimal`` and ``robust`` methods: the residual (nominal and
+        worst case) of the result and of JL, evaluations and time.
     """
 
     profile: str
@@ -83,6 +87,7 @@ class TuningResult:
     merged: bool = False
     history: list[tuple[int, int, int, int]] = field(default_factory=list)
     converged: bool = True
+    search: Any = None
 
     @property
     def iterations(self) -> int:
@@ -93,9 +98,26 @@ class TuningResult:
         """One-line summary."""
         ms = "/".join(f"{t * 1e3:.0f}" for t in (self.T_F[:1] if self.profile == "JL"
                                                   else self.T_F))
+        if self.search is not None:
+            r = self.search
+            what = ("worst case over " + _uncertainty(r) if r.method == "robust"
+                    else "nominal residual")
+            return (f"{self.profile} jerk times {ms} ms (method '{self.rule}': minimum "
+                    f"{what}; residual {r.nominal * 1e3:.3g} mm, worst over "
+                    f"{_uncertainty(r)} {r.worst * 1e3:.3g} mm; JL {r.jl_nominal * 1e3:.3g} / "
+                    f"{r.jl_worst * 1e3:.3g} mm; {r.evaluations} evaluations in "
+                    f"{r.seconds:.2f} s)")
         state = "converged" if self.converged else "NOT converged"
         return (f"{self.profile} jerk times {ms} ms (rule '{self.rule}', {state} in "
                 f"{self.iterations} plan(s){', middle stages merged' if self.merged else ''})")
+
+
+def _uncertainty(r: Any) -> str:
+    e = (max(r.factors) - 1.0) * 100.0 if r.factors else 0.0
+    txt = f"map error +/-{e:.0f} %"
+    if r.damping and tuple(r.damping) != (1.0,):
+        txt += f", damping x {min(r.damping):g}..{max(r.damping):g}"
+    return txt
 
 
 def _samples(T: float, Te: float) -> int:
