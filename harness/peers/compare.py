@@ -5,7 +5,8 @@ For one scenario (:mod:`harness.scenario`), :func:`compare_scenario`
 1. runs AL, JL and DJL exactly as ``djl-fmu simulate`` does
    (:func:`harness.cosim.run_case`: JL tuned to the modal period at the end of
    the motion, DJL stage by stage), which also fixes the settling band (the
-   largest residual of DJL, the paper's band);
+   scenario's ``settle_band``, by default 1 % of AL's residual, one band for
+   every method);
 2. builds the peers from the same move (distance, v_max, a_max, d_max, Te),
    each tuned *to the mode at the end of the motion* (frequency of the tuned
    mode at the final Z position, its damping), as an engineer would:
@@ -19,7 +20,16 @@ For one scenario (:mod:`harness.scenario`), :func:`compare_scenario`
      frequency within the limits;
    * ``AL*ZV``, ``AL*ZVD``, ``AL*MZV``, ``AL*EI``: the FMU's AL profile
      convolved with the shaper (exact delays);
+   * ``JL*ZV``, ``JL*ZVD``, ``JL*EI`` (and ``JL*MZV`` on request): the FMU's JL
+     profile (the harness's JL, jerk time = modal period at the end of the
+     motion) convolved with the shaper, as input shapers are used on
+     jerk-limited machines;
+   * ``AL*TV-ZV``, ``JL*TV-ZV``: the time-varying ZV shaper
+     (:mod:`harness.peers.tv_shaper`, after Chang & Park 2005), whose impulses
+     follow the mode along the synchronised Z move instead of the end mode;
    * ``damped jerk``: the FMU's AL profile filtered by the damped-jerk filter;
+   * ``DJL (optimal)``, ``DJL (robust)``: the DJL with the harness's other
+     tuning methods (``sc.compare.djl_tuning``), when the harness has them;
 
 3. feeds every peer's reference to the same plant (:class:`harness.plant.ScheduledPlant`)
    with the same Z axis (a generator FMU instance, its move synchronised with
@@ -28,7 +38,12 @@ For one scenario (:mod:`harness.scenario`), :func:`compare_scenario`
    acceleration is fed piece by piece, split at the method's own switching
    instants, so an input shaper's off-sample delays are not smeared), and
    measures it with :func:`harness.cosim.profile_metrics` in the same band;
-4. computes the residual of every method on a *stationary* mode whose
+4. measures every method against a map error on the time-varying plant: the
+   whole f(z) map scaled by 1 + e, e in ±20 %, each reference planned once on
+   the nominal map (:func:`reference_map_error_residuals` for the peers,
+   :func:`harness.robustness.map_error_residuals` for AL / JL / DJL), and
+   its worst case over ±10 %;
+5. computes the residual of every method on a *stationary* mode whose
    frequency deviates from the tuned one (:func:`harness.peers.residual.robustness_curve`).
 
 :func:`stationary_variant` turns a scenario into one whose Z axis does not
@@ -53,10 +68,21 @@ from .sato import amplitude_table1, jerk_J1, sato_profile
 from .shapers import make_shaper, shape
 from .trajectory import Motion, PiecewiseJerk, SampledTrajectory
 
-PEERS = ("time-optimal JL", "Sato III", "AL*ZV", "AL*ZVD", "AL*MZV", "AL*EI", "damped jerk")
-"""The peer methods, in table order (after AL, JL, DJL)."""
+PEERS = ("time-optimal JL", "Sato III", "AL*ZV", "AL*ZVD", "AL*MZV", "AL*EI", "JL*ZV",
+         "JL*ZVD", "JL*EI", "AL*TV-ZV", "JL*TV-ZV", "damped jerk")
+"""The peer methods run by default, in table order (after AL, JL, DJL)."""
+
+OPTIONAL_PEERS = ("JL*MZV",)
+"""Peers run only when asked for (``peers=`` / ``--peers``)."""
+
+ALL_PEERS = PEERS + OPTIONAL_PEERS
+"""Every peer :func:`build_peers` knows."""
 
 BASE = ("AL", "JL", "DJL")
+
+DJL_TUNINGS = ("optimal", "robust")
+"""DJL tuning methods added as rows ``DJL (<tuning>)`` when the harness has
+``sc.compare.djl_tuning`` (the paper's rule is the ``DJL`` row)."""
 
 
 # ------------------------------------------------------------------ building
@@ -126,78 +152,154 @@ class PeerSpec:
     params: dict[str, Any] = field(default_factory=dict)
 
 
+def base_motion(sc: Any, profile: str, T_F: float | None = None, distance: float | None = None,
+                *, session: Any = None, fmu: Any = None, fmi_version: int = 2) -> PiecewiseJerk:
+    """The generator's AL or JL profile of the scenario's move, as an exact motion.
+
+    Parameters
+    ----------
+    sc : harness.scenario.Scenario
+    profile : {"AL", "JL"}
+    T_F : float, optional
+        JL jerk time (s), all four stages.
+    distance : float, optional
+        Signed distance (m); default the scenario's.
+    session : harness.cosim.Session, optional
+        Plan with its excited axis (FMU or fast engine); otherwise through
+        :func:`harness.fmu.runner.generate` with ``fmu`` / ``fmi_version``.
+    fmu, fmi_version
+        Generator FMU when no session is given (default: the scenario's).
+
+    Returns
+    -------
+    PiecewiseJerk
+        Rebuilt exactly from the samples, then :meth:`~PiecewiseJerk.simplified`
+        (one breakpoint per stage boundary).
+    """
+    m, s = sc.move, sc.simulation
+    params: dict[str, Any] = {
+        "profile": {"AL": 1, "JL": 2}[profile], "Te": s.Te, "t_start": m.t_start, "x0": m.x0,
+        "distance": m.distance if distance is None else float(distance), "v_max": m.v_max,
+        "a_max": m.a_max, "d_max": m.d_max, "short_stage": s.short_stage}
+    if profile == "JL":
+        if T_F is None:
+            raise ValueError("JL needs its jerk time T_F")
+        params.update({f"T_F{i}": float(T_F) for i in range(1, 5)})
+    if session is not None:
+        ms = session.axis.sample(params)
+        mot = PiecewiseJerk.from_samples(ms.t, ms.x, ms.v, ms.a, ms.j, name=profile,
+                                         params=params)
+    else:
+        from ..fmu.runner import generate
+        from .trajectory import from_fmu
+
+        tr = generate(params, fmu=s.fmu if fmu is None else fmu, fmi_version=fmi_version)
+        mot = from_fmu(tr, name=profile).to_motion()  # type: ignore[assignment]
+    return mot.simplified()
+
+
 def build_peers(sc: Any, T_F_JL: float, motion_time_JL: float, *,
                 peers: Iterable[str] = PEERS, fmu: Any = None,
-                fmi_version: int = 2) -> dict[str, tuple[Motion, PeerSpec]]:
+                fmi_version: int = 2, session: Any = None) -> dict[str, tuple[Motion, PeerSpec]]:
     """Exact motions of the peer methods for the move of scenario ``sc``.
 
     Parameters
     ----------
     sc : harness.scenario.Scenario
     T_F_JL : float
-        JL jerk time (s) found by the harness (sets the time-optimal jerk limit).
+        JL jerk time (s) found by the harness (sets the time-optimal jerk limit
+        and the JL profile the ``JL*`` shapers act on).
     motion_time_JL : float
         JL motion time (s) (Sato's positioning time).
     peers : iterable of str
-        Subset of :data:`PEERS`.
+        Subset of :data:`ALL_PEERS`.
     fmu, fmi_version
-        Generator FMU for the AL profile.
+        Generator FMU for the AL and JL profiles when no session is given.
+    session : harness.cosim.Session, optional
+        Plans the AL / JL profiles and, for the time-varying shapers, the
+        synchronised Z move; without it an FMU session is opened for the
+        time-varying shapers.
 
     Returns
     -------
     dict
         ``name -> (motion, spec)``.
     """
-    from ..fmu.runner import generate
-    from .trajectory import from_fmu
+    from .tv_shaper import design_for_scenario
 
     m, s = sc.move, sc.simulation
     peers = tuple(peers)
-    unknown = [p for p in peers if p not in PEERS]
+    unknown = [p for p in peers if p not in ALL_PEERS]
     if unknown:
-        raise ValueError(f"unknown peer method(s) {unknown}; choose from {PEERS}")
+        raise ValueError(f"unknown peer method(s) {unknown}; choose from {ALL_PEERS}")
     tm = sc.modemap.tuned
     z_end = sc.z.z0 + sc.z.distance
     f_end, zeta = float(tm.f(z_end)), float(tm.zeta)
     sign = 1.0 if m.distance > 0 else -1.0
     out: dict[str, tuple[Motion, PeerSpec]] = {}
-    al = None
-    if any(p.startswith("AL*") or p == "damped jerk" for p in peers):
-        al_params = {"profile": 1, "Te": s.Te, "t_start": m.t_start, "x0": m.x0,
-                     "distance": m.distance, "v_max": m.v_max, "a_max": m.a_max,
-                     "d_max": m.d_max, "short_stage": s.short_stage}
-        al = from_fmu(generate(al_params, fmu=s.fmu if fmu is None else fmu,
-                               fmi_version=fmi_version), name="AL").to_motion()
+    own = None
+    if session is None and any("TV-" in p for p in peers):
+        from ..cosim import Session
+
+        own = session = Session(s.fmu if fmu is None else fmu, fmi_version)
+    kw = {"session": session, "fmu": fmu, "fmi_version": fmi_version}
+    bases: dict[str, PiecewiseJerk] = {}
+
+    def base(profile: str) -> PiecewiseJerk:
+        if profile not in bases:
+            bases[profile] = base_motion(sc, profile, T_F_JL, **kw)
+        return bases[profile]
+
     mode_txt = f"{f_end:.4g} Hz, zeta = {zeta:g} (mode at the end of the motion)"
-    for p in peers:
-        if p == "time-optimal JL":
-            j_max = m.a_max / T_F_JL
-            r = time_optimal(m.distance, m.v_max, m.a_max, j_max, d_max=m.d_max)
-            mot = _placed(r.motion(name=p), m.t_start, m.x0)
-            out[p] = (mot, PeerSpec(p, f"limits v_max, a_max, d_max, j_max = a_max/T_F(JL) = "
-                                       f"{j_max:.4g} m/s3 (not tuned)",
-                                    {"j_max": j_max, "T_opt": r.duration}))
-        elif p == "Sato III":
-            T_SUM, T1 = sato_design(m.distance, m.v_max, min(m.a_max, m.d_max), f_end, s.Te,
-                                    motion_time_JL)
-            prof = sato_profile(abs(m.distance), T_SUM, T1, "III")
-            mot = _placed(prof.motion(name=p), m.t_start, m.x0, sign)
-            out[p] = (mot, PeerSpec(p, f"T_SUM = {T_SUM * 1e3:.0f} ms, T1 = {T1 * 1e3:.0f} ms "
-                                       f"(eq. 28 minimised at {f_end:.4g} Hz)",
-                                    {"T_SUM": T_SUM, "T1": T1, "f": f_end}))
-        elif p.startswith("AL*"):
-            sh = make_shaper(p[3:], f_end, zeta)
-            assert al is not None
-            mot = shape(al, sh, name=p)
-            out[p] = (mot, PeerSpec(p, f"{mode_txt}; adds {sh.duration * 1e3:.0f} ms",
-                                    {"f": f_end, "zeta": zeta, "A": sh.A.tolist(),
-                                     "t": sh.t.tolist()}))
-        else:  # damped jerk
-            assert al is not None
-            flt = DampedJerkFilter(f_end, zeta)
-            mot = DampedJerkMotion.from_al(al, flt, name=p)
-            out[p] = (mot, PeerSpec(p, f"{mode_txt}; jerk time {flt.T * 1e3:.0f} ms",
-                                    {"f": f_end, "zeta": zeta, "T": flt.T}))
+    try:
+        for p in peers:
+            if p == "time-optimal JL":
+                j_max = m.a_max / T_F_JL
+                r = time_optimal(m.distance, m.v_max, m.a_max, j_max, d_max=m.d_max)
+                mot = _placed(r.motion(name=p), m.t_start, m.x0)
+                out[p] = (mot, PeerSpec(p, f"limits v_max, a_max, d_max, j_max = a_max/T_F(JL) "
+                                           f"= {j_max:.4g} m/s3 (not tuned)",
+                                        {"j_max": j_max, "T_opt": r.duration}))
+            elif p == "Sato III":
+                T_SUM, T1 = sato_design(m.distance, m.v_max, min(m.a_max, m.d_max), f_end, s.Te,
+                                        motion_time_JL)
+                prof = sato_profile(abs(m.distance), T_SUM, T1, "III")
+                mot = _placed(prof.motion(name=p), m.t_start, m.x0, sign)
+                out[p] = (mot, PeerSpec(p, f"T_SUM = {T_SUM * 1e3:.0f} ms, T1 = {T1 * 1e3:.0f} ms "
+                                           f"(eq. 28 minimised at {f_end:.4g} Hz)",
+                                        {"T_SUM": T_SUM, "T1": T1, "f": f_end}))
+            elif p.endswith("*TV-ZV"):
+                prof = p[:2]
+                des = design_for_scenario(
+                    sc, session,
+                    lambda d, prof=prof: base_motion(sc, prof, T_F_JL, d, **kw), name=p)
+                sh = des.shaper
+                d0 = float(sh.delay(des.base.t_start)[()])
+                d1 = float(sh.delay(des.base.t_end)[()])
+                jl_txt = f"JL T_F {T_F_JL * 1e3:.0f} ms; " if prof == "JL" else ""
+                out[p] = (des.motion, PeerSpec(
+                    p, f"{jl_txt}tuned mode f(z(t)) along the synchronised Z move, zeta = "
+                       f"{zeta:g}; delay {d0 * 1e3:.1f} -> {d1 * 1e3:.1f} ms; {prof} planned for "
+                       f"{des.distance_correction * 1e3:+.3g} mm so that the shaped move ends "
+                       "on the target",
+                    {"zeta": zeta, "rule": sh.rule, "delay_start": d0, "delay_end": d1,
+                     "distance_correction": des.distance_correction,
+                     "iterations": des.iterations, "sync_mismatch": des.sync_mismatch}))
+            elif p[:3] in ("AL*", "JL*"):
+                sh = make_shaper(p[3:], f_end, zeta)
+                mot = shape(base(p[:2]), sh, name=p)
+                jl_txt = f"JL T_F {T_F_JL * 1e3:.0f} ms; " if p[:2] == "JL" else ""
+                out[p] = (mot, PeerSpec(p, f"{jl_txt}{mode_txt}; adds {sh.duration * 1e3:.0f} ms",
+                                        {"f": f_end, "zeta": zeta, "A": sh.A.tolist(),
+                                         "t": sh.t.tolist()}))
+            else:  # damped jerk
+                flt = DampedJerkFilter(f_end, zeta)
+                mot = DampedJerkMotion.from_al(base("AL"), flt, name=p)
+                out[p] = (mot, PeerSpec(p, f"{mode_txt}; jerk time {flt.T * 1e3:.0f} ms",
+                                        {"f": f_end, "zeta": zeta, "T": flt.T}))
+    finally:
+        if own is not None:
+            own.close()
     return out
 
 

@@ -296,6 +296,29 @@ class PiecewiseJerk(Motion):
         jj = np.where(before, 0.0, jj)
         return x, v, a, jj
 
+    def simplified(self, rtol: float = 1e-9) -> PiecewiseJerk:
+        """Return the same motion without the breakpoints where nothing changes.
+
+        A breakpoint is dropped when the jerk on both sides is the same and the
+        acceleration is continuous there (both to ``rtol`` times the largest
+        |jerk| and |acceleration|): e.g. the FMU's profiles, rebuilt with one
+        breakpoint per sample, keep only their stage boundaries.  The state at
+        the kept breakpoints is unchanged, so the motion is the same to
+        ``rtol`` (and to rounding for exactly constant jerk).
+        """
+        if self.tb.size < 3:
+            return self
+        j_tol = rtol * max(float(np.max(np.abs(self.j[:-1]))), 1e-300)
+        a_tol = rtol * max(float(np.max(np.abs(self.a))), 1e-300)
+        h = np.diff(self.tb)
+        a_left = self.a[:-1] + self.j[:-1] * h  # just before tb[1:]
+        same = (np.abs(self.j[1:-1] - self.j[:-2]) <= j_tol) & (
+            np.abs(self.a[1:-1] - a_left[:-1]) <= a_tol)
+        keep = np.r_[True, ~same, True]
+        i = np.flatnonzero(keep)
+        return PiecewiseJerk(self.tb[i], self.x[i], self.v[i], self.a[i], self.j[i],
+                             name=self.name, params=dict(self.params))
+
     # ------------------------------------------------------------ algebra
 
     def shifted(self, delay: float, *, name: str | None = None) -> PiecewiseJerk:
