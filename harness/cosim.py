@@ -32,6 +32,7 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -43,6 +44,7 @@ import numpy as np
 
 from .evaluation import ProfileMetrics, profile_metrics, run_case  # noqa: F401 (re-exported)
 from .fmu.runner import FMUError
+from .optimize import split_profile
 from .planner import PROFILE_CODES, AxisFMU, MoveSamples, sync_z_velocity
 from .plant import Mode, ScheduledMode, ScheduledPlant, free_amplitude, free_response
 from .scenario import Scenario, load_scenario
@@ -406,7 +408,8 @@ class Session:
         """FMU parameters of the excited axis for ``profile`` and jerk times ``T_F``."""
         m, s = sc.move, sc.simulation
         p: dict[str, Any] = {
-            "profile": PROFILE_CODES[profile], "Te": s.Te, "t_start": m.t_start, "x0": m.x0,
+            "profile": PROFILE_CODES[split_profile(profile)[0]], "Te": s.Te,
+            "t_start": m.t_start, "x0": m.x0,
             "distance": m.distance, "v_max": m.v_max, "a_max": m.a_max, "d_max": m.d_max,
             "short_stage": s.short_stage,
         }
@@ -455,6 +458,11 @@ class Session:
         start of each stage, rule ``djl_rule``), ``optimal`` or ``robust``
         (:mod:`harness.optimize`, on the fast engine whatever this session's).
         """
+        profile, method = split_profile(profile)
+        if method is not None:  # a variant: "DJL-robust" is DJL tuned with "robust"
+            field = "jl_tuning" if profile == "JL" else "djl_tuning"
+            sc = dataclasses.replace(sc, compare=dataclasses.replace(
+                sc.compare, **{field: method}, JL_T_F=None, DJL_T_F=None))
         mm, Te, cmp = sc.modemap, sc.simulation.Te, sc.compare
         if profile == "JL" and cmp.JL_T_F is None:
             jl = tune_jl(self.plan(sc, "JL"), mm.period, Te, mm.period(sc.z.z0 + sc.z.distance))
@@ -526,7 +534,8 @@ class Session:
 def run_scenario(scenario: Scenario | str | Path, *, fmu: str | Path | None = None,
                  fmi_version: int | None = None, progress: bool = False,
                  session: Session | None = None, engine: str | None = None,
-                 robustness: bool | str | None = "auto"):
+                 robustness: bool | str | None = "auto", workers: int | None = 1,
+                 scheduler: str | None = None):
     """Run a scenario: one call from a TOML file (or embedded name) to the results.
 
     Parameters
@@ -564,6 +573,9 @@ def run_scenario(scenario: Scenario | str | Path, *, fmu: str | Path | None = No
         session = Session(sc.simulation.fmu, sc.simulation.fmi_version, engine=engine)
     if robustness == "auto":
         robustness = "worst" if sc.is_sweep else "curves"
+    if sc.is_sweep and session is None and (workers != 1 or scheduler is not None):
+        return _run_sweep_parallel(sc, engine or "fast", robustness, workers, scheduler,
+                                   progress)
     # the many map-error runs go to the fast engine (same results), unless the scenario names
     # its own FMU file: its generator may differ from the package's, so it runs them itself
     own_fmu = session.fmu is not None or sc.simulation.fmu is not None
@@ -585,14 +597,37 @@ def run_scenario(scenario: Scenario | str | Path, *, fmu: str | Path | None = No
             rsession.close()
 
 
-def _progress(items: list[Any], enabled: bool, desc: str):
+def _run_sweep_parallel(sc: Scenario, engine: str, robustness: Any, workers: int | None,
+                        scheduler: str | None, progress: bool):
+    """Run a sweep's cases on a process pool or a Dask cluster (same results as serially)."""
+    from concurrent.futures import as_completed
+
+    from .executors import executor_workers, make_executor
+    from .results import SweepResult
+    from .workspace import run_sweep_batch
+
+    n = len(sc.cases())
+    with make_executor(workers, scheduler) as ex:
+        size = max(1, math.ceil(n / (4 * max(1, executor_workers(ex)))))
+        batches = [list(range(i, min(n, i + size))) for i in range(0, n, size)]
+        futures = {ex.submit(run_sweep_batch, sc, engine, robustness, b): b for b in batches}
+        results: list[Any] = [None] * n
+        done = _progress(as_completed(futures), progress, desc=sc.name, total=len(batches))
+        for fut in done:
+            for i, r in zip(futures[fut], fut.result(), strict=True):
+                results[i] = r
+    return SweepResult(sc, results)
+
+
+def _progress(items: Any, enabled: bool, desc: str, total: int | None = None):
     import sys
 
     if not enabled or not sys.stderr.isatty():
         return items
     from tqdm import tqdm
 
-    return tqdm(items, desc=desc, unit="case", leave=False)
+    return tqdm(items, desc=desc, unit="case" if total is None else "batch", leave=False,
+                total=total)
 
 
 simulate = run_scenario

@@ -52,6 +52,8 @@ if TYPE_CHECKING:
 __all__ = [
     "DJL_METHODS",
     "JL_METHODS",
+    "VARIANTS",
+    "split_profile",
     "Objective",
     "TuningOptions",
     "pattern_search",
@@ -66,6 +68,29 @@ JL_METHODS = ("end", "optimal")
 
 STEPS = (16, 8, 4, 2, 1)
 """Pattern-search step sizes (samples)."""
+
+VARIANTS = ("JL-optimal", "DJL-paper", "DJL-optimal", "DJL-robust")
+"""Profile names that carry their tuning method: ``<profile>-<method>`` (e.g. in
+``[compare] profiles``, next to ``JL`` and ``DJL`` which follow ``jl_tuning`` /
+``djl_tuning``)."""
+
+
+def split_profile(name: str) -> tuple[str, str | None]:
+    """Split a profile name into the generator profile and the tuning method it imposes.
+
+    ``"DJL-robust"`` → ``("DJL", "robust")``; ``"JL"`` → ``("JL", None)``.
+
+    Raises
+    ------
+    ValueError
+        If the name is neither AL, JL, DJL nor one of :data:`VARIANTS`.
+    """
+    if name in ("AL", "JL", "DJL"):
+        return name, None
+    if name in VARIANTS:
+        base, method = name.split("-", 1)
+        return base, method
+    raise ValueError(f"unknown profile {name!r}: AL, JL, DJL or one of {', '.join(VARIANTS)}")
 
 
 @dataclass(frozen=True)

@@ -38,7 +38,8 @@ __all__ = [
     "write_csv",
 ]
 
-COLORS = {"AL": "0.45", "JL": "tab:blue", "DJL": "tab:red"}
+COLORS = {"AL": "0.45", "JL": "tab:blue", "DJL": "tab:red", "JL-optimal": "tab:cyan",
+          "DJL-paper": "tab:pink", "DJL-optimal": "tab:green", "DJL-robust": "tab:purple"}
 
 MOVE_KEY_FIELDS = ("N_F", "motion_time", "v_reached", "a_reached", "d_reached", "distance",
                    "x0", "z0", "z_distance", "z_v_max")
@@ -717,6 +718,51 @@ class SweepResult:
         """
         return {k: table2_stats(v) for k, v in self.changes_all(distinct=True).items()}
 
+    def tuned_variants(self) -> list[str]:
+        """Profiles with their own tuning method (``DJL-optimal``, ...) compared with JL."""
+        first = self.cases[0].profiles if self.cases else {}
+        return [p for p in first if "-" in p and "JL" in first]
+
+    def tuned_stats(self, variant: str) -> dict[str, float]:
+        """Compare a tuned variant with JL over the distinct moves (issue #9 targets).
+
+        Returns
+        -------
+        dict
+            ``residual_pct_of_JL_mean`` / ``_max`` (its residual as % of JL's),
+            ``worse_than_JL`` (moves where it leaves more than JL, to 1e-12),
+            ``worst_pct_of_JL_mean`` / ``_max`` (its worst residual over a
+            ±10 % map error as % of JL's worst; NaN if not computed),
+            ``worst_below_DJL`` (moves where its worst case is below the
+            paper-rule DJL's; NaN without DJL), ``motion_time_change_pct_mean``
+            / ``_max`` (motion time against JL's), ``n`` (distinct moves).
+        """
+        cases = self.distinct()
+        res = np.array([c.metric(variant, "residual") / c.metric("JL", "residual")
+                        for c in cases])
+        worse = sum(c.metric(variant, "residual") > c.metric("JL", "residual") * (1 + 1e-12)
+                    for c in cases)
+        w = np.array([c.metric(variant, "worst_residual_10pct")
+                      / c.metric("JL", "worst_residual_10pct") for c in cases])
+        below = (sum(c.metric(variant, "worst_residual_10pct")
+                     < c.metric("DJL", "worst_residual_10pct") for c in cases)
+                 if cases and "DJL" in cases[0].profiles else math.nan)
+        mt = np.array([c.relative("motion_time", variant, "JL", change=True) for c in cases])
+
+        def stat(fn: Any, x: np.ndarray) -> float:
+            x = x[np.isfinite(x)]
+            return float(fn(x)) if x.size else math.nan
+
+        return {"residual_pct_of_JL_mean": 100 * stat(np.mean, res),
+                "residual_pct_of_JL_max": 100 * stat(np.max, res),
+                "worse_than_JL": float(worse),
+                "worst_pct_of_JL_mean": 100 * stat(np.mean, w),
+                "worst_pct_of_JL_max": 100 * stat(np.max, w),
+                "worst_below_DJL": float(below),
+                "motion_time_change_pct_mean": stat(np.mean, mt),
+                "motion_time_change_pct_max": stat(np.max, mt),
+                "n": float(len(cases))}
+
     def table(self) -> str:
         """Table 2 of the paper for this sweep alone."""
         return format_table2([self])
@@ -837,6 +883,24 @@ def format_table2(sweeps: Sequence[SweepResult]) -> str:
                + "".join(f"{len(s.distinct()):>{w}d}" for s in sweeps))
     for s in sweeps:
         out.append(f"{s.scenario.name}: {s.merged_note()}")
+    variants = [v for v in sweeps[0].tuned_variants()
+                if all(v in s.tuned_variants() for s in sweeps)] if sweeps else []
+    for v in variants:
+        st = [s.tuned_stats(v) for s in sweeps]
+        out.append("")
+        out.append(f"{v} against JL (jerk times tuned on the time-varying model), per distinct "
+                   "move")
+        for key, lab, fmt in (
+                ("residual_pct_of_JL_mean", "residual, % of JL's: mean", ".2f"),
+                ("residual_pct_of_JL_max", "  largest", ".2f"),
+                ("worse_than_JL", "moves leaving more than JL", ".0f"),
+                ("worst_pct_of_JL_mean", "worst over +/-10 % map, % of JL's", ".1f"),
+                ("worst_pct_of_JL_max", "  largest", ".1f"),
+                ("worst_below_DJL", "worst case below paper-rule DJL's", ".0f"),
+                ("motion_time_change_pct_mean", "motion time vs JL, %: mean", "+.2f"),
+                ("motion_time_change_pct_max", "  largest", "+.2f")):
+            out.append(f"  {lab:<{w0 - 2}}" + "".join(
+                f"{format(x[key], fmt) if math.isfinite(x[key]) else 'n/a':>{w}}" for x in st))
     return "\n".join(out)
 
 

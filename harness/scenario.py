@@ -52,7 +52,8 @@ Format (all lengths in m, times in s, frequencies in Hz)::
     mass_ratio = 1.0                # load mass / mass of the survey (f / sqrt(ratio))
 
     [compare]                       # optional
-    profiles = ["AL", "JL", "DJL"]
+    profiles = ["AL", "JL", "DJL"]  # also "JL-optimal", "DJL-paper", "DJL-optimal",
+                                    # "DJL-robust": a profile with its own tuning method
     tune_mode = 1                   # mode (1-based) the jerk times are tuned to
     djl_rule = "start"              # the paper's rule: "start" (paper) or "phase"
     djl_tuning = "paper"            # DJL jerk times: "paper" (the rule above), "optimal"
@@ -98,7 +99,7 @@ else:  # pragma: no cover
 
 from .metrics import DEFAULT_SETTLE_BAND, SettleBand, parse_settle_band
 from .modemap import CantileverLaw, ConstantLaw, LinearLaw, ModeMap, ModeSpec, TableLaw
-from .optimize import DJL_METHODS, JL_METHODS
+from .optimize import DJL_METHODS, JL_METHODS, VARIANTS
 from .tuning import RULES
 
 __all__ = [
@@ -644,10 +645,11 @@ def parse_scenario(data: Mapping[str, Any], source: str = "<string>",
     # [compare]
     c = _Table(source, "compare", top.raw("compare", {}))
     profiles = c.raw("profiles", list(PROFILES))
+    known = PROFILES + VARIANTS
     if (not isinstance(profiles, list) or not profiles
-            or any(p not in PROFILES for p in profiles) or len(set(profiles)) != len(profiles)):
+            or any(p not in known for p in profiles) or len(set(profiles)) != len(profiles)):
         raise c.err("profiles", profiles, f"must be a non-empty list of distinct names among "
-                    f"{', '.join(PROFILES)}")
+                    f"{', '.join(known)}")
     tune_mode = c.integer("tune_mode", 1)
     if not 1 <= tune_mode <= len(modes):
         raise c.err("tune_mode", tune_mode, f"must be between 1 and {len(modes)} (the modes)")

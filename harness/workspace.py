@@ -717,3 +717,40 @@ def _edges(v: np.ndarray) -> np.ndarray:
         return np.array([v[0] - w, v[0] + w])
     mid = 0.5 * (v[1:] + v[:-1])
     return np.concatenate(([v[0] - (mid[0] - v[0])], mid, [v[-1] + (v[-1] - mid[-1])]))
+
+
+_FAST_SESSION: list[Any] = []
+
+
+def run_sweep_batch(scenario: Scenario, engine: str, robustness: Any,
+                    indices: Sequence[int]) -> list[Any]:
+    """Run some cases of a sweep (a task of :func:`harness.cosim.run_scenario` on workers).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The sweep scenario.
+    engine : {"fmu", "fast"}
+        Evaluation engine of the runs.
+    robustness : bool or str
+        As :func:`harness.evaluation.run_case` (map-error runs on the fast engine).
+    indices : sequence of int
+        Which cases of ``scenario.cases()``.
+
+    Returns
+    -------
+    list of ScenarioResult
+        In the order of ``indices``, time series dropped.
+    """
+    from .evaluation import run_case
+
+    session = _worker_session(engine, scenario)
+    if engine == "fast" or not robustness:
+        rs = session
+    else:
+        if not _FAST_SESSION:
+            _FAST_SESSION.append(_make_session("fast", None, 2))
+        rs = _FAST_SESSION[0]
+    cases = scenario.cases()
+    return [run_case(cases[i], session, keep_runs=False, robustness=robustness,
+                     robustness_session=rs) for i in indices]

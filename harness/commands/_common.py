@@ -127,3 +127,64 @@ def run_forked(tasks: Sequence[Callable[[], Any]], workers: int | None = None
             return list(pool.map(_call, range(len(tasks))))
     finally:
         _TASKS.clear()
+
+
+TUNING_HELP = (
+    "add profiles tuned by other methods, comma-separated: DJL 'optimal' (least residual on "
+    "the time-varying model, never worse than JL), 'robust' (least worst case over the map "
+    "error), 'paper' (the paper's rule, what DJL uses by default); 'jl=optimal' for JL. "
+    "E.g. --tuning optimal,robust adds the profiles DJL-optimal and DJL-robust")
+
+
+def parse_tuning(text: str | None) -> list[str]:
+    """Profile variants named by ``--tuning`` (e.g. ``"optimal,robust"`` → DJL-optimal, DJL-robust).
+
+    Raises
+    ------
+    CommandError
+        With status 2 for an unknown method.
+    """
+    from ..optimize import DJL_METHODS, JL_METHODS
+
+    if not text:
+        return []
+    out: list[str] = []
+    for item in (x.strip() for x in text.split(",")):
+        if not item:
+            continue
+        prof, _, method = item.partition("=")
+        if not method:
+            prof, method = "djl", prof
+        prof = prof.strip().upper()
+        method = method.strip().lower()
+        allowed = {"DJL": DJL_METHODS, "JL": JL_METHODS}.get(prof)
+        if allowed is None or method not in allowed:
+            raise CommandError(2, f"--tuning {text!r}: {item!r} is not a tuning method (DJL: "
+                                  f"{', '.join(DJL_METHODS)}; JL: jl={', jl='.join(JL_METHODS)})")
+        if (prof, method) in (("JL", "end"),):
+            continue  # JL's own method
+        name = f"{prof}-{method}"
+        if name not in out:
+            out.append(name)
+    return out
+
+
+def apply_tuning(scenarios: Sequence[Any], variants: Sequence[str],
+                 map_error: float | None) -> list[Any]:
+    """Add the tuned profile variants and the robust method's map error to every scenario."""
+    import dataclasses
+
+    if map_error is not None and not (0.0 <= map_error < 1.0):
+        raise CommandError(2, f"--map-error {map_error!r}: must be in [0, 1) (0.1 = +/-10 %)")
+    out = []
+    for sc in scenarios:
+        cmp = sc.compare
+        profiles = tuple(cmp.profiles) + tuple(v for v in variants if v not in cmp.profiles)
+        if any(v.startswith("DJL") or v.startswith("JL") for v in variants) and \
+                "JL" not in profiles:
+            profiles = ("JL", *profiles)  # the tuned variants are compared with JL
+        cmp = dataclasses.replace(cmp, profiles=profiles)
+        if map_error is not None:
+            cmp = dataclasses.replace(cmp, map_error=float(map_error))
+        out.append(dataclasses.replace(sc, compare=cmp))
+    return out

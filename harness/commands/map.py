@@ -6,6 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from ._common import TUNING_HELP
+
 DESCRIPTION = """\
 Map the workspace: run every move of a grid and measure, for each compared
 profile (AL, JL, DJL), the residual vibration, the motion time and the
@@ -81,6 +83,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--engine", choices=("fast", "fmu"), default="fast",
                    help="evaluation engine: 'fast' (compiled, default) or 'fmu' (the "
                         "generator FMUs through fmpy)")
+    p.add_argument("--tuning", default=None, metavar="LIST", help=TUNING_HELP)
+    p.add_argument("--map-error", type=float, default=None, metavar="E",
+                   help="uncertainty of the 'robust' tuning: the whole mode map off by up to +/-E "
+                        "(default: the scenario's map_error, 0.1)")
     p.add_argument("--no-plot", action="store_true", help="do not write the PNG heat maps")
     p.add_argument("-q", "--quiet", action="store_true",
                    help="no progress bar, do not print the summary")
@@ -102,7 +108,14 @@ def _run(args: argparse.Namespace) -> int:
     from ..executors import ExecutorError, make_executor
     from ..fmu.runner import FMUError
     from ..workspace import MapError, check_engine, run_map
-    from ._common import CommandError, load_scenarios, report_written, write_outputs
+    from ._common import (
+        CommandError,
+        apply_tuning,
+        load_scenarios,
+        parse_tuning,
+        report_written,
+        write_outputs,
+    )
 
     # 1. check everything before running anything
     if args.workers is not None and args.workers < 1:
@@ -113,6 +126,7 @@ def _run(args: argparse.Namespace) -> int:
         raise CommandError(2, "give --workers or --scheduler, not both (on a Dask cluster "
                               "the cluster's workers run the moves)")
     (sc,), (stem,) = load_scenarios([args.scenario], None, None, args.out)
+    (sc,) = apply_tuning([sc], parse_tuning(args.tuning), args.map_error)
     if sc.map is None:
         raise CommandError(2, f"scenario {sc.name} ({sc.source}) has no [map] table: add one "
                               f"(format: docs/map.md), or use the embedded X or Y")

@@ -7,6 +7,8 @@ import functools
 import sys
 from pathlib import Path
 
+from ._common import TUNING_HELP
+
 DESCRIPTION = """\
 Co-simulate the generator FMU (one instance for the excited X or Y axis, one for
 the Z axis) with a flexible axis whose vibration mode depends on the Z position
@@ -74,6 +76,13 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="fmu: the generator FMUs stepped through fmpy (the reference); fast: the "
                         "same generator core and plant compiled, called once per move (default: "
                         "fmu for single moves, fast for sweeps)")
+    p.add_argument("--tuning", default=None, metavar="LIST", help=TUNING_HELP)
+    p.add_argument("--map-error", type=float, default=None, metavar="E",
+                   help="uncertainty of the 'robust' tuning: the whole mode map f(z) off by up to "
+                        "+/-E (default: the scenario's map_error, 0.1)")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="with --tuning: run each sweep's cases on N processes (default: every "
+                        "core); without it the scenarios already share the cores")
     p.add_argument("--no-plot", action="store_true", help="do not write the PNG figures")
     p.add_argument("--list", action="store_true",
                    help="list the embedded scenarios and exit")
@@ -98,7 +107,9 @@ def _run(args: argparse.Namespace) -> int:
     from ..scenario import DEFAULT_SCENARIOS, embedded_scenarios
     from ._common import (
         CommandError,
+        apply_tuning,
         load_scenarios,
+        parse_tuning,
         report_written,
         run_forked,
         write_outputs,
@@ -112,6 +123,10 @@ def _run(args: argparse.Namespace) -> int:
     # 1. check everything before simulating anything
     scenarios, stems = load_scenarios(args.scenarios or list(DEFAULT_SCENARIOS), args.fmu,
                                       args.fmi_version, args.out)
+    variants = parse_tuning(args.tuning)
+    scenarios = apply_tuning(scenarios, variants, args.map_error)
+    if args.workers is not None and args.workers < 1:
+        raise CommandError(2, f"--workers {args.workers}: must be >= 1")
 
     # 2. simulate (nothing is written yet)
     import matplotlib
@@ -125,12 +140,15 @@ def _run(args: argparse.Namespace) -> int:
     from ..cosim import run_scenario  # noqa: F401 - imported once, before the workers fork
     from ..results import SweepResult, format_table2, table2_rows, write_csv
 
-    progress = not args.quiet and len(scenarios) == 1
+    progress = not args.quiet and (len(scenarios) == 1 or bool(variants))
     staging = Path(tempfile.mkdtemp(prefix="djl-fmu-simulate-"))
     try:
-        outcomes = run_forked([functools.partial(_scenario_task, sc, stem, staging, progress,
-                                                 args.engine, not args.no_plot)
-                               for sc, stem in zip(scenarios, stems, strict=True)])
+        tasks = [functools.partial(_scenario_task, sc, stem, staging, progress, args.engine,
+                                   not args.no_plot, args.workers if variants else 1)
+                 for sc, stem in zip(scenarios, stems, strict=True)]
+        # tuned variants make sweeps long: then each sweep uses the cores itself, one
+        # scenario after the other; otherwise the scenarios share the cores
+        outcomes = run_forked(tasks, workers=1 if variants else None)
         results, figures = [], []
         for sc, (ok, value) in zip(scenarios, outcomes, strict=True):
             if not ok:
@@ -170,12 +188,12 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _scenario_task(sc, stem: str, staging: Path, progress: bool, engine: str | None,
-                   plot: bool) -> tuple[object, list[str]]:
+                   plot: bool, workers: int | None = 1) -> tuple[object, list[str]]:
     """Run one scenario and draw its figures into ``staging``; return it and their names."""
     from ..cosim import run_scenario
     from ..results import save_figure
 
-    r = run_scenario(sc, progress=progress, engine=engine)
+    r = run_scenario(sc, progress=progress, engine=engine, workers=workers)
     names = []
     if plot:
         names.append(save_figure(r.plot(), staging / f"{stem}.png").name)
