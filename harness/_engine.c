@@ -363,6 +363,123 @@ static PyObject *plan_get_shifted(PlanObject *self, void *c)
     return PyBool_FromLong(self->shifted);
 }
 
+/* Plan.residuals(m, k_end, h, f_mid, zeta, gain, f_end, factors, out):
+ * the free-oscillation amplitude, summed over the modes, at communication point k_end of a
+ * co-simulation with step h = m Te, for each frequency factor c (every mode frequency
+ * scaled by c): the plant stepped from rest with the input a_k + j_k tau of this plan and
+ * the frequencies f_mid[mode, k] c, as step_modes does; no array of samples is built. */
+static PyObject *plan_residuals(PlanObject *self, PyObject *args)
+{
+    PyObject *of, *oz, *og, *ofe, *ofac, *oout;
+    long long m;
+    Py_ssize_t k_end, nm, nf, k, i, q;
+    double h;
+    Py_buffer bf, bz, bg, bfe, bfac, bout;
+    double *st;
+    const double two_pi = DJL_TWO_PI;
+    int32_t cursor = 0;
+    int bad = 0;
+    if (!PyArg_ParseTuple(args, "LndOOOOOO", &m, &k_end, &h, &of, &oz, &og, &ofe, &ofac, &oout))
+        return NULL;
+    if (m < 1 || k_end < 0 || !(h > 0.0)) {
+        PyErr_SetString(PyExc_ValueError, "m must be >= 1, k_end >= 0 and h > 0");
+        return NULL;
+    }
+    if (PyObject_GetBuffer(oz, &bz, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) return NULL;
+    nm = bz.len / 8;
+    PyBuffer_Release(&bz);
+    if (PyObject_GetBuffer(ofac, &bfac, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) return NULL;
+    nf = bfac.len / 8;
+    PyBuffer_Release(&bfac);
+    if (nm < 1 || nf < 1) {
+        PyErr_SetString(PyExc_ValueError, "at least one mode and one factor are needed");
+        return NULL;
+    }
+    if (get_in_buffer(of, &bf, nm * k_end, "f_mid") < 0) return NULL;
+    if (get_in_buffer(oz, &bz, nm, "zeta") < 0) goto f1;
+    if (get_in_buffer(og, &bg, nm, "gain") < 0) goto f2;
+    if (get_in_buffer(ofe, &bfe, nm, "f_end") < 0) goto f3;
+    if (get_in_buffer(ofac, &bfac, nf, "factors") < 0) goto f4;
+    if (get_out_buffer(oout, &bout, nf, "out") < 0) goto f5;
+    for (i = 0; i < nm && !bad; i++)
+        bad = !(((const double *)bz.buf)[i] >= 0.0 && ((const double *)bz.buf)[i] < 1.0);
+    for (k = 0; k < nm * k_end && !bad; k++)
+        bad = !(((const double *)bf.buf)[k] > 0.0 && isfinite(((const double *)bf.buf)[k]));
+    for (q = 0; q < nf && !bad; q++)
+        bad = !(((const double *)bfac.buf)[q] > 0.0 && isfinite(((const double *)bfac.buf)[q]));
+    if (bad) {
+        PyErr_SetString(PyExc_ValueError, "damping ratios must be in [0, 1), frequencies and "
+                        "factors finite and > 0");
+        goto f6;
+    }
+    st = (double *)PyMem_Calloc((size_t)(2 * nm * nf), sizeof(double));
+    if (!st) {
+        PyErr_NoMemory();
+        goto f6;
+    }
+    {
+        const double *f = bf.buf, *zeta = bz.buf, *gain = bg.buf, *fe = bfe.buf;
+        const double *fac = bfac.buf;
+        double *out = bout.buf;
+        Py_BEGIN_ALLOW_THREADS
+        for (k = 0; k < k_end; k++) {
+            djl_sample smp;
+            djl_eval(&self->plan, (double)(k * m) - self->offset, &cursor, &smp);
+            for (q = 0; q < nf; q++) {
+                for (i = 0; i < nm; i++) {
+                    double *e = &st[2 * (q * nm + i)];
+                    double omega = two_pi * (f[i * k_end + k] * fac[q]);
+                    double z = zeta[i], g = gain[i];
+                    double sig = z * omega;
+                    double w2 = omega * omega;
+                    double wd = omega * sqrt(1.0 - z * z);
+                    double ex = exp(-sig * h);
+                    double c = cos(wd * h);
+                    double s = sin(wd * h) / wd;
+                    double beta = -g * smp.j / w2;
+                    double alpha = (-g * smp.a - 2.0 * sig * beta) / w2;
+                    double d1 = e[0] - alpha;
+                    double d2 = e[1] - beta;
+                    e[0] = alpha + beta * h + ex * ((c + sig * s) * d1 + s * d2);
+                    e[1] = beta + ex * (-w2 * s * d1 + (c - sig * s) * d2);
+                }
+            }
+        }
+        for (q = 0; q < nf; q++) {
+            double total = 0.0;
+            for (i = 0; i < nm; i++) {
+                const double *e = &st[2 * (q * nm + i)];
+                double omega = two_pi * (fe[i] * fac[q]);
+                double z = zeta[i];
+                total += hypot(e[0], (e[1] + z * omega * e[0]) / (omega * sqrt(1.0 - z * z)));
+            }
+            out[q] = total;
+        }
+        Py_END_ALLOW_THREADS
+    }
+    PyMem_Free(st);
+    PyBuffer_Release(&bout);
+    PyBuffer_Release(&bfac);
+    PyBuffer_Release(&bfe);
+    PyBuffer_Release(&bg);
+    PyBuffer_Release(&bz);
+    PyBuffer_Release(&bf);
+    Py_RETURN_NONE;
+f6:
+    PyBuffer_Release(&bout);
+f5:
+    PyBuffer_Release(&bfac);
+f4:
+    PyBuffer_Release(&bfe);
+f3:
+    PyBuffer_Release(&bg);
+f2:
+    PyBuffer_Release(&bz);
+f1:
+    PyBuffer_Release(&bf);
+    return NULL;
+}
+
 static PyGetSetDef plan_getset[] = {
     {"motion_time", (getter)plan_get_motion_time, NULL,
      "Duration of the motion, filters included (s).", NULL},
@@ -386,6 +503,9 @@ static PyMethodDef plan_methods[] = {
     {"sample_into", (PyCFunction)plan_sample_into, METH_VARARGS,
      "sample_into(out, n0, step, count): out[i, k] = variable i (x, v, a, j, x_AL, v_AL, a_AL) "
      "at FMU sample n0 + k*step (out: float64 array of shape (7, count))."},
+    {"residuals", (PyCFunction)plan_residuals, METH_VARARGS,
+     "residuals(m, k_end, h, f_mid, zeta, gain, f_end, factors, out): free-oscillation "
+     "amplitude (sum over the modes) at communication point k_end, for each frequency factor."},
     {"at", (PyCFunction)plan_at, METH_VARARGS,
      "at(n): (x, v, a, j, x_AL, v_AL, a_AL, done, segment) at FMU sample n (fractional allowed)."},
     {NULL, NULL, 0, NULL},

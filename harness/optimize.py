@@ -42,8 +42,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .plant import Mode, free_amplitude
-
 if TYPE_CHECKING:
     from .cosim import Session
     from .scenario import Scenario
@@ -172,9 +170,9 @@ class Objective:
         self.h = sc.simulation.step
         self.m = int(round(self.h / self.Te))
         self.modes = sc.modemap.scheduled()
-        self.zeta = np.array([m.zeta for m in self.modes])
-        self.gain = np.array([m.gain for m in self.modes])
-        self._z: dict[float, tuple[int, np.ndarray, list[float]]] = {}
+        self.zeta = np.array([m.zeta for m in self.modes], dtype=float)
+        self.gain = np.array([m.gain for m in self.modes], dtype=float)
+        self._z: dict[float, tuple[int, np.ndarray, np.ndarray]] = {}
         self.evaluations = 0
 
     def plan(self, N: Sequence[int]) -> float:
@@ -184,7 +182,7 @@ class Objective:
             T_F = (T_F[0],) * 4
         return self.session.axis.plan(self.session.move_params(self.sc, self.profile, T_F))
 
-    def _z_path(self, T_x: float) -> tuple[int, np.ndarray, list[float]]:
+    def _z_path(self, T_x: float) -> tuple[int, np.ndarray, np.ndarray]:
         got = self._z.get(T_x)
         if got is None:
             s, sc = self.session, self.sc
@@ -195,8 +193,8 @@ class Objective:
             Z = s.z_axis.samples(0, int(round(self.h / s.z_axis.planned.Te)), k_end + 1)
             z, v_z = Z[0], Z[1]
             zm = 0.5 * (z[:-1] + z[1:]) + (0.125 * self.h) * (v_z[:-1] - v_z[1:])
-            f_mid = np.vstack([m.f_array(zm) for m in self.modes])
-            f_end = [float(m.f_of_z(float(z[k_end]))) for m in self.modes]
+            f_mid = np.ascontiguousarray(np.vstack([m.f_array(zm) for m in self.modes]))
+            f_end = np.array([float(m.f_of_z(float(z[k_end]))) for m in self.modes])
             got = (k_end, f_mid, f_end)
             self._z[T_x] = got
         return got
@@ -213,28 +211,18 @@ class Objective:
             Shape (len(damping), len(factors)): the free-oscillation amplitude
             when the reference ends, summed over the modes.
         """
-        from . import _engine
-
         self.evaluations += 1
         T_x = self.plan(N)
         k_end, f_mid, f_end = self._z_path(T_x)
-        X = self.session.axis.samples(0, self.m, k_end + 1)
-        a = np.ascontiguousarray(X[2])
-        j = np.ascontiguousarray(X[3])
-        nm = len(self.modes)
-        out = np.empty((len(damping), len(factors)))
-        eps = np.empty(k_end + 1)
-        states = np.empty((k_end + 1, 2 * nm))
+        fac = np.asarray(factors, dtype=float)
+        out = np.empty((len(damping), fac.size))
+        row = np.empty(fac.size)
+        plan = self.session.axis.planned
         for p, dz in enumerate(damping):
-            zeta = np.minimum(self.zeta * dz, 0.999)
-            for q, c in enumerate(factors):
-                state = np.zeros(2 * nm)
-                _engine.step_modes(a, j, self.h, f_mid * c if c != 1.0 else f_mid, zeta,
-                                   self.gain, k_end, state, eps, states)
-                out[p, q] = sum(free_amplitude(float(state[2 * i]), float(state[2 * i + 1]),
-                                               Mode(f_end[i] * c, float(zeta[i]),
-                                                    float(self.gain[i])))
-                                for i in range(nm))
+            zeta = self.zeta if dz == 1.0 else np.minimum(self.zeta * dz, 0.999)
+            # the plant stepped in C over the samples of the plan, every factor in one pass
+            plan.residuals(self.m, k_end, self.h, f_mid, zeta, self.gain, f_end, fac, row)
+            out[p] = row
         return T_x, out
 
 

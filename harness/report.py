@@ -159,11 +159,13 @@ def _claim_section(r: ClaimResult, img_src: Callable[[int, int, bytes], str]) ->
 
 def peers_section(settings: Settings,
                   img_src: Callable[[int, int, bytes], str] | None = None) -> str:
-    """HTML section comparing AL / JL / DJL with the peers (issue 5) on scenarios X and Y.
+    """HTML section comparing AL / JL / DJL with the peers (issues 5 and 9) on scenarios X and Y.
 
     Every method goes through the same co-simulation (generator FMU or the peer's exact
-    motion, Z axis, plant) and the same metrics as ``djl-fmu compare``; fast settings
-    use fewer points on the robustness curves.
+    motion, Z axis, plant) and the same metrics as ``djl-fmu compare``, at the same
+    settling band and over the same map-error range (time-varying plant, fast engine);
+    fast settings use fewer points on the robustness curves.  One figure per scenario:
+    the stationary-mode curves beside the time-varying map-error curves.
     """
     import numpy as np
 
@@ -171,19 +173,30 @@ def peers_section(settings: Settings,
     from .scenario import load_scenario
 
     errors = np.linspace(-0.4, 0.4, 9 if settings.fast else 41)
+    map_errors = np.linspace(-0.2, 0.2, 9 if settings.fast else 41)
     parts = [
         "<h2 id='peers'>Peers side by side: which law ends the motion soonest within the "
         "tolerance?</h2>",
         "<p>AL, JL and DJL from the FMU against the methods users would otherwise pick: "
         "time-optimal jerk-limited (Park et al. 2017, cross-checked with ruckig), Sato &amp; "
         "Shirase 2021's designed jerk times (Condition III), the ZV, ZVD, MZV and EI input "
-        "shapers convolved with the AL profile and the damped-jerk law (Béarée 2014 §4.2), "
-        "all tuned to the mode at the end of the motion, on the harness's default scenarios. "
+        "shapers convolved with the AL profile, the ZV, ZVD and EI shapers convolved with the "
+        "JL profile (as shapers are used on jerk-limited machines), the damped-jerk law "
+        "(Béarée 2014 §4.2), all tuned to the mode at the end of the motion; a time-varying "
+        "ZV shaper whose impulses follow the mode along the Z move (after Chang &amp; Park "
+        "2005, the reference [12] of Béarée &amp; Olabi 2013), on AL and on JL; and the DJL "
+        "with the harness's optimal and robust tuning when available. "
         "Motion time is also given relative to the time-optimal JL with the same limits; "
         "residual (free-oscillation amplitude at the end) in % of AL; settling into the "
-        "scenario's band, shared by every method (default: 1 % of AL's residual). "
-        "The figures show the residual against an error on the mode frequency (stationary "
-        "mode). Same as <code>djl-fmu compare</code>; details in docs/peers.md.</p>",
+        "scenario's band, shared by every method (default: 1 % of AL's residual); "
+        "worst±10%: the largest residual when the whole map f(z) of the time-varying plant "
+        "is off by 1 + e, |e| ≤ 10 %, every reference planned on the nominal map. "
+        "Each table ends with the verdict (who leaves the least residual, who settles "
+        "first, who has the smallest worst case). "
+        "The figures show the residual against an error on the mode frequency: left on a "
+        "stationary mode at the end frequency, right on the time-varying plant (Z moving), "
+        "whole map scaled by 1 + e. Same as <code>djl-fmu compare</code>; details in "
+        "docs/peers.md.</p>",
     ]
     if img_src is None:
         def img_src(_n: int, _i: int, png: bytes) -> str:
@@ -195,8 +208,8 @@ def peers_section(settings: Settings,
         sc = load_scenario(name).with_fmu(
             None if settings.fmu is None else Path(settings.fmu), settings.fmi_version)
         try:
-            cmp = compare_scenario(sc, errors=errors)
-            fig = cmp.plot()
+            cmp = compare_scenario(sc, errors=errors, map_errors=map_errors)
+            fig = cmp.plot_robustness()
             png = _figure_png(fig)
             plt.close(fig)
             parts.append(f"<h3>Scenario {_e(name)}</h3>\n<pre>{_e(cmp.table())}</pre>\n"

@@ -187,6 +187,37 @@ def test_step_modes_refuses_bad_inputs(bad, text):
                            np.empty((n + 1, 2)))
 
 
+def test_plan_residuals_equal_stepping_the_samples():
+    """Plan.residuals (one pass in C, no samples kept) against step_modes over sampled a, j
+    and the free amplitude of harness.plant, for two modes and three factors."""
+    from harness.plant import Mode, free_amplitude
+
+    pl = _engine.plan({"profile": 3, "distance": 0.3, "v_max": 0.6, "a_max": 3.0,
+                       "d_max": 3.0, "T_F1": 0.11, "T_F2": 0.09, "T_F3": 0.12, "T_F4": 0.1,
+                       "t_start": 0.05})
+    m, h = 2, 2e-3
+    k_end = int(math.ceil((pl.motion_time + 0.05) / h))
+    rng = np.random.default_rng(5)
+    f_mid = np.ascontiguousarray(np.vstack([7 + rng.random(k_end), 18 + rng.random(k_end)]))
+    zeta, gain, f_end = np.array([0.03, 0.01]), np.array([1.0, 0.3]), np.array([7.2, 18.4])
+    factors = np.array([0.9, 1.0, 1.07])
+    got = np.empty(3)
+    pl.residuals(m, k_end, h, f_mid, zeta, gain, f_end, factors, got)
+    X = np.empty((7, k_end + 1))
+    pl.sample_into(X, 0, m, k_end + 1)
+    for q, c in enumerate(factors):
+        state, eps, states = np.zeros(4), np.empty(k_end + 1), np.empty((k_end + 1, 4))
+        _engine.step_modes(X[2].copy(), X[3].copy(), h, f_mid * c, zeta, gain, k_end, state,
+                           eps, states)
+        ref = sum(free_amplitude(state[2 * i], state[2 * i + 1],
+                                 Mode(f_end[i] * c, zeta[i], gain[i])) for i in range(2))
+        assert got[q] == pytest.approx(ref, rel=1e-12)
+    with pytest.raises(ValueError, match="damping"):
+        pl.residuals(m, k_end, h, f_mid, np.array([1.0, 0.0]), gain, f_end, factors, got)
+    with pytest.raises(ValueError, match="f_mid"):
+        pl.residuals(m, k_end + 5, h, f_mid, zeta, gain, f_end, factors, got)
+
+
 def test_map_error_residuals_equal_runs_on_the_scaled_map():
     sc = load_scenario("X")
     with Session(engine="fast") as s:
@@ -276,6 +307,9 @@ for i in range(3000):
     _engine.step_modes(np.append(out[2], 0.0), np.append(out[3], 0.0), 1e-3,
                        np.full((1, n), 7.0), np.array([0.03]), np.ones(1), n, np.zeros(2),
                        eps, states)
+    res = np.empty(3)
+    pl.residuals(1, n, 1e-3, np.full((2, n), 7.0), np.array([0.03, 0.0]), np.ones(2),
+                 np.array([7.0, 9.0]), np.array([0.9, 1.0, 1.1]), res)
 print("ok")
 """
 

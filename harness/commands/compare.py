@@ -13,22 +13,36 @@ profiles and their peers go through the same co-simulation (the Z axis FMU and
 the flexible axis whose mode follows Z) and the same metrics.
 
 Peers, each tuned to the mode at the end of the motion (its frequency at the
-final Z position and its damping):
+final Z position and its damping) unless said otherwise:
   time-optimal JL   ruckig under v_max, a_max and the JL's jerk a_max/T_F(JL)
                     (Park et al. 2017); the motion-time ratios refer to it
   Sato III          Sato & Shirase 2021, Condition III, T_SUM = the JL's motion
                     time (longer if v_max or a_max demand it), T1 from eq. 28
   AL*ZV, AL*ZVD, AL*MZV, AL*EI
                     the FMU's AL profile convolved with an input shaper
+  JL*ZV, JL*ZVD, JL*EI (JL*MZV on request)
+                    the FMU's JL profile (the harness's JL, jerk time = modal
+                    period at the end) convolved with an input shaper
+  AL*TV-ZV, JL*TV-ZV
+                    time-varying ZV shaper (after Chang & Park 2005): each
+                    impulse pair placed half a local damped period apart and
+                    weighted from the mode along the synchronised Z move
   damped jerk       the AL profile filtered by the damped-jerk filter
                     (Bearee 2014, 4.2)
+  DJL (optimal), DJL (robust)
+                    the DJL with the harness's optimal and robust tuning
+                    ([compare] djl_tuning), fast engine; --no-tuned-djl skips
+                    them
 
 Per scenario: motion time and its ratio to the time-optimal JL, residual
 vibration (free-oscillation amplitude when the reference ends) and % of AL,
 settling time into the band of the scenario (default: 1 % of AL's residual,
-shared by every method), and the residual against the mode-frequency error on
-a stationary mode (robustness of the peers tuned to that mode; the time-varying
-robustness of JL and DJL to a map error is in `djl-fmu simulate`).
+shared by every method), the worst residual over a map error within +/-10 %
+on the time-varying plant (the whole f(z) map scaled by 1 + e, every reference
+planned once on the nominal map; curves over +/-20 %, fast engine), and the
+residual against the mode-frequency error on a stationary mode at the end
+frequency.  A verdict closes each table: who leaves the least residual, who
+settles first, who has the smallest worst case, with the numbers.
 Each scenario also runs as a stationary variant (Z still at its final
 position), unless --no-stationary.  With --timeopt N (default 30), random moves
 measure how much slower than time-optimal the FIR-built JL and DJL are (per
@@ -39,8 +53,13 @@ scenario; default: X and Y.  Sweeps are not accepted.
 
 Outputs, in --out (default ./djl-fmu-out/compare), written once every run has
 succeeded:
-  <name>.csv              one row per method
-  <name>-robustness.csv   residual against the frequency error, per method
+  <name>.csv              one row per method (worst_residual_10pct_m: the
+                          worst case over a map error within +/-10 %)
+  <name>-map-error.csv    residual against the map error e (time-varying plant,
+                          whole map scaled by 1 + e), per method
+  <name>-map-error.png    the same, plotted
+  <name>-robustness.csv   residual against the frequency error of a stationary
+                          mode, per method
   <name>-robustness.png   the same, plotted
   <name>-runs.png         acceleration and deflection of every method
   timeopt.csv             the random moves (with --timeopt)
@@ -53,6 +72,7 @@ examples:
   djl-fmu compare                       X and Y, each also with a stationary mode
   djl-fmu compare Y --no-stationary     scenario Y only
   djl-fmu compare my_axis.toml --peers AL*ZVD,damped jerk --timeopt 0
+  djl-fmu compare --engine fast --no-tuned-djl
 
 Exit status: 0 on success, 2 for a bad scenario or option (nothing run, nothing
 written), 1 if a run fails.
@@ -64,7 +84,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "compare",
         help="compare AL/JL/DJL with time-optimal JL, Sato's designed jerk times, input "
-             "shapers and the damped-jerk law on the same plant (default: scenarios X, Y)",
+             "shapers (on AL and JL, and time-varying), the damped-jerk law and the optimal "
+             "and robust DJL on the same plant (default: scenarios X, Y)",
         description=DESCRIPTION,
         epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -76,8 +97,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-stationary", action="store_true",
                    help="do not add the stationary-mode variant of each scenario")
     p.add_argument("--peers", default=None, metavar="LIST",
-                   help="comma-separated subset of the peers (default: all: time-optimal JL, "
-                        "Sato III, AL*ZV, AL*ZVD, AL*MZV, AL*EI, damped jerk)")
+                   help="comma-separated subset of the peers (default: time-optimal JL, "
+                        "Sato III, AL*ZV, AL*ZVD, AL*MZV, AL*EI, JL*ZV, JL*ZVD, JL*EI, "
+                        "AL*TV-ZV, JL*TV-ZV, damped jerk; also JL*MZV)")
+    p.add_argument("--no-tuned-djl", action="store_true",
+                   help="do not add the rows DJL (optimal) and DJL (robust)")
     p.add_argument("--timeopt", type=int, default=30, metavar="N",
                    help="random moves per case for the FIR-JL/DJL vs time-optimal "
                         "measurement (default 30; 0 to skip)")
@@ -107,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from ..peers.compare import PEERS, stationary_variant
+    from ..peers.compare import ALL_PEERS, PEERS, stationary_variant
     from ..peers.ruckig_ref import ruckig_available
     from ._common import (
         CommandError,
@@ -125,9 +149,9 @@ def _run(args: argparse.Namespace) -> int:
     peers = PEERS
     if args.peers:
         peers = tuple(x.strip() for x in args.peers.split(",") if x.strip())
-        bad = [x for x in peers if x not in PEERS]
+        bad = [x for x in peers if x not in ALL_PEERS]
         if bad or not peers:
-            raise CommandError(2, f"unknown peer(s) {bad}; choose from: {', '.join(PEERS)}")
+            raise CommandError(2, f"unknown peer(s) {bad}; choose from: {', '.join(ALL_PEERS)}")
     if args.timeopt < 0:
         raise CommandError(2, "--timeopt must be >= 0")
     scenarios, _ = load_scenarios(args.scenarios or ["X", "Y"], args.fmu, args.fmi_version,
@@ -159,7 +183,8 @@ def _run(args: argparse.Namespace) -> int:
     try:
         for sc in tqdm(scenarios, disable=not show, desc="scenarios", leave=False):
             current = sc.name
-            results.append(compare_scenario(sc, peers=peers, engine=args.engine))
+            results.append(compare_scenario(sc, peers=peers, engine=args.engine,
+                                            tuned_djl=not args.no_tuned_djl))
         table_t = None
         if args.timeopt:
             current = "time-optimal measurement"
@@ -180,8 +205,13 @@ def _run(args: argparse.Namespace) -> int:
     def write(written: list[Path]) -> None:
         for stem, r in zip(stems, results, strict=True):
             written.append(r.to_csv(out / f"{stem}.csv"))
+            if r.map_error is not None:
+                written.append(write_csv(out / f"{stem}-map-error.csv", r.map_error_rows()))
             written.append(write_csv(out / f"{stem}-robustness.csv", r.robustness_rows()))
             if not args.no_plot:
+                if r.map_error is not None:
+                    written.append(save_figure(r.plot_map_error(),
+                                               out / f"{stem}-map-error.png"))
                 written.append(save_figure(r.plot(), out / f"{stem}-robustness.png"))
                 written.append(save_figure(r.plot_runs(), out / f"{stem}-runs.png"))
         if table_t is not None:

@@ -11,7 +11,9 @@ objects (exact) that sample into :class:`~harness.peers.trajectory.SampledTrajec
 * :mod:`~harness.peers.sato` -- four jerk times under a fixed positioning time
   (Sato & Shirase 2021, Conditions I-III, Table 1, Fig. 8 and Fig. 10);
 * :mod:`~harness.peers.shapers` -- ZV, ZVD, MZV, EI input shapers convolved with
-  the FMU's AL profile;
+  the FMU's AL (or JL) profile;
+* :mod:`~harness.peers.tv_shaper` -- a time-varying ZV shaper whose impulses
+  follow the mode along the Z move (after Chang & Park 2005);
 * :mod:`~harness.peers.damped_jerk` -- the damped-jerk law (Béarée 2014 §4.2);
 * :mod:`~harness.peers.residual` -- exact residual vibration on a second-order
   mode, and robustness curves;

@@ -61,6 +61,7 @@ from typing import Any
 
 import numpy as np
 
+from ..robustness import DEFAULT_ERRORS
 from .damped_jerk import DampedJerkFilter, DampedJerkMotion
 from .residual import RobustnessCurve, robustness_curve
 from .ruckig_ref import time_optimal
@@ -79,6 +80,10 @@ ALL_PEERS = PEERS + OPTIONAL_PEERS
 """Every peer :func:`build_peers` knows."""
 
 BASE = ("AL", "JL", "DJL")
+
+MAP_ERRORS = DEFAULT_ERRORS
+"""Map errors e of the time-varying robustness curves: -20 % .. +20 %, 1 % apart
+(:data:`harness.robustness.DEFAULT_ERRORS`); the worst case is over ±10 %."""
 
 DJL_TUNINGS = ("optimal", "robust")
 """DJL tuning methods added as rows ``DJL (<tuning>)`` when the harness has
@@ -154,7 +159,7 @@ class PeerSpec:
 
 def base_motion(sc: Any, profile: str, T_F: float | None = None, distance: float | None = None,
                 *, session: Any = None, fmu: Any = None, fmi_version: int = 2) -> PiecewiseJerk:
-    """The generator's AL or JL profile of the scenario's move, as an exact motion.
+    """Return the generator's AL or JL profile of the scenario's move, as an exact motion.
 
     Parameters
     ----------
@@ -306,6 +311,86 @@ def build_peers(sc: Any, T_F_JL: float, motion_time_JL: float, *,
 # ------------------------------------------------------------ co-simulation
 
 
+@dataclass
+class _Prepared:
+    """What :func:`cosimulate_reference` computes before stepping the plant.
+
+    None of it depends on the mode map: the map-error runs share it.
+    """
+
+    n: int
+    h: float
+    ref: SampledTrajectory
+    a: list[float]
+    a1: list[float]
+    sub: dict[int, list[tuple[float, float, float]]]
+    Za: np.ndarray
+    zm: list[float]
+    v_z: float
+    synced: bool
+    T_z: float
+    k_end: int
+
+
+def _prepare(sc: Any, session: Any, motion: Motion, t_stop: float | None) -> _Prepared:
+    """Sample the reference, split the steps at its breakpoints, run the Z axis."""
+    sim = sc.simulation
+    h = sim.step
+    v_z, synced = session.z_velocity(sc, motion.motion_time)
+    zp = session.z_move_params(sc, v_z)
+    T_z = session.z_axis.plan(zp)
+    if t_stop is None:
+        t_stop = sc.move.t_start + max(motion.motion_time, T_z) + sim.t_after
+    n = int(math.ceil(t_stop / h - 1e-9))
+    ref = motion.sample(h, t_stop=n * h)
+    t = ref.t
+    # sub-intervals: communication points plus the motion's breakpoints in between
+    bp = motion.breakpoints()
+    bp = bp[(bp > t[0]) & (bp < t[-1])]
+    k_bp = np.searchsorted(t, bp, side="right") - 1  # step index of each breakpoint
+    off = bp > t[k_bp]
+    bp, k_bp = bp[off], k_bp[off]
+    sub: dict[int, list[tuple[float, float, float]]] = {}
+    if bp.size:
+        ks = np.unique(k_bp)
+        # every edge of every split step, in order: t[k], its breakpoints, t[k + 1]
+        pts = np.unique(np.concatenate((t[ks], t[ks + 1], bp)))
+        e0, e1 = pts[:-1], pts[1:]
+        k0 = np.searchsorted(t, e0, side="right") - 1
+        inside = np.isin(k0, ks) & (e1 <= t[np.minimum(k0 + 1, t.size - 1)]) & (e1 > e0)
+        e0, e1, k0 = e0[inside], e1[inside], k0[inside]
+        ar = motion.evaluate(e0, side="right")[2]
+        al = motion.evaluate(e1, side="left")[2]
+        for k, x0, x1, u0, u1 in zip(k0.tolist(), e0.tolist(), e1.tolist(), ar.tolist(),
+                                     al.tolist(), strict=True):
+            sub.setdefault(k, []).append((x1 - x0, u0, u1))
+    a_end = ref.a + ref.j * h  # acceleration at the end of each step (jerk constant per step)
+    Za = _z_samples(session, n, h)
+    z, vz = Za[:, 0], Za[:, 1]
+    zm = (0.5 * (z[:-1] + z[1:]) + 0.125 * h * (vz[:-1] - vz[1:])).tolist()
+    k_end = min(n, int(math.ceil(motion.t_end / h - 1e-9)))
+    return _Prepared(n, h, ref, ref.a.tolist(), a_end.tolist(), sub, Za, zm, v_z, synced, T_z,
+                     k_end)
+
+
+def _step(prep: _Prepared, plant: Any, n: int) -> tuple[list[float], list[tuple[float, ...]]]:
+    """Step the plant over the first ``n`` communication steps; deflection and states."""
+    pstep = plant.step
+    a, a1, zm, sub, h = prep.a, prep.a1, prep.zm, prep.sub, prep.h
+    E = [0.0]
+    S = [tuple(plant.state)]
+    for k in range(n):
+        pieces = sub.get(k)
+        if pieces is None:
+            e = pstep(h, a[k], a1[k], zm[k])
+        else:
+            for hh, u0, u1 in pieces:
+                e = pstep(hh, u0, u1, zm[k])
+        E.append(e)
+        S.append(tuple(plant.state))
+    return E, S
+
+
 def cosimulate_reference(sc: Any, session: Any, motion: Motion, label: str,
                          t_stop: float | None = None) -> Any:
     """Step the Z generator FMU and the scenario's plant with a precomputed reference.
@@ -329,69 +414,74 @@ def cosimulate_reference(sc: Any, session: Any, motion: Motion, label: str,
     from ..plant import ScheduledPlant
 
     sim = sc.simulation
-    h = sim.step
-    v_z, synced = session.z_velocity(sc, motion.motion_time)
-    zp = session.z_move_params(sc, v_z)
-    T_z = session.z_axis.plan(zp)
-    if t_stop is None:
-        t_stop = sc.move.t_start + max(motion.motion_time, T_z) + sim.t_after
-    n = int(math.ceil(t_stop / h - 1e-9))
-    ref = motion.sample(h, t_stop=n * h)
-    t = ref.t
-    # sub-intervals: communication points plus the motion's breakpoints in between
-    bp = motion.breakpoints()
-    bp = bp[(bp > t[0]) & (bp < t[-1])]
-    inner = np.searchsorted(t, bp, side="right") - 1  # step index of each breakpoint
-    cuts: dict[int, list[float]] = {}
-    for k, b in zip(inner.tolist(), bp.tolist(), strict=True):
-        if b > t[k]:
-            cuts.setdefault(k, []).append(b)
-    a_end = ref.a + ref.j * h  # acceleration at the end of each step (jerk constant per step)
-    sub: dict[int, list[tuple[float, float, float]]] = {}
-    for k, bs in cuts.items():
-        edges = [float(t[k]), *bs, float(t[k + 1])]
-        ar = motion.evaluate(edges[:-1], side="right")[2]
-        al = motion.evaluate(edges[1:], side="left")[2]
-        sub[k] = [(e1 - e0, float(u0), float(u1)) for e0, e1, u0, u1 in
-                  zip(edges[:-1], edges[1:], ar, al, strict=True) if e1 > e0]
-    Za = _z_samples(session, n, h)
+    prep = _prepare(sc, session, motion, t_stop)
+    n, h, ref, Za = prep.n, prep.h, prep.ref, prep.Za
     plant = ScheduledPlant(sc.modemap.scheduled())
-    pstep = plant.step
-    a = ref.a.tolist()
-    a1 = a_end.tolist()
-    z, vz = Za[:, 0].tolist(), Za[:, 1].tolist()
-    E = [0.0]
-    S = [tuple(plant.state)]
-    half = 0.125 * h
     t0 = time.perf_counter()
-    for k in range(n):
-        zm = 0.5 * (z[k] + z[k + 1]) + half * (vz[k] - vz[k + 1])
-        pieces = sub.get(k)
-        if pieces is None:
-            e = pstep(h, a[k], a1[k], zm)
-        else:
-            for hh, u0, u1 in pieces:
-                e = pstep(hh, u0, u1, zm)
-        E.append(e)
-        S.append(tuple(plant.state))
+    E, S = _step(prep, plant, n)
     wall = time.perf_counter() - t0
     Sa = np.asarray(S, dtype=float)
     nm = len(plant.modes)
-    t_end = motion.t_end
-    k_end = min(n, int(math.ceil(t_end / h - 1e-9)))
+    k_end = prep.k_end
     f = np.vstack([md.f_array(Za[:, 0]) for md in plant.modes])
     return CoSimResult(
-        profile=label, t=t, x=ref.x, v=ref.v, a=ref.a, j=ref.j, z=Za[:, 0], v_z=Za[:, 1],
+        profile=label, t=ref.t, x=ref.x, v=ref.v, a=ref.a, j=ref.j, z=Za[:, 0], v_z=Za[:, 1],
         eps=np.asarray(E), eps_modes=Sa[:, 0::2].T.copy(), f=f, t_start=motion.t_start,
-        t_end=t_end, z_t_end=float(session.z_axis.get("t_start")) + T_z, x0=sc.move.x0,
-        target=sc.move.x0 + sc.move.distance,
+        t_end=motion.t_end, z_t_end=float(session.z_axis.get("t_start")) + prep.T_z,
+        x0=sc.move.x0, target=sc.move.x0 + sc.move.distance,
         state_end=[(float(Sa[k_end, 2 * i]), float(Sa[k_end, 2 * i + 1])) for i in range(nm)],
         modes_end=[md.at(float(Za[k_end, 0])) for md in plant.modes], N_F=(0, 0, 0, 0),
-        Te=sim.Te, step=h, z_v_max=v_z, z_synced=synced,
+        Te=sim.Te, step=h, z_v_max=prep.v_z, z_synced=prep.synced,
         fmi_version=session.z_axis.fmi_version, engine=getattr(session, "engine", "fmu"),
         wall_time=wall, final_state=list(plant.state),
         final_modes=[md.at(float(Za[-1, 0])) for md in plant.modes],
     )
+
+
+def reference_map_error_residuals(sc: Any, session: Any, motion: Motion,
+                                  errors: Sequence[float] | np.ndarray) -> np.ndarray:
+    """Residual of a precomputed reference when the whole mode map is off by 1 + e.
+
+    For each e, the residual (free-oscillation amplitude when the reference
+    ends) of ``cosimulate_reference(dataclasses.replace(sc,
+    modemap=sc.modemap.scaled(1 + e)), session, motion, ...)``: the reference
+    is the one planned on the nominal map, the Z move the same (it does not
+    depend on the map), only the plant's frequencies are scaled.  The
+    sampling, the splitting of the steps and the Z samples are computed once
+    and the plant is stepped only until the end of the reference, with the
+    same operations as :func:`cosimulate_reference` (equal results; tested).
+
+    Parameters
+    ----------
+    sc : harness.scenario.Scenario
+        The nominal scenario.
+    session : harness.cosim.Session
+        Its Z axis.
+    motion : Motion
+        The reference (planned on the nominal map).
+    errors : array_like
+        Relative map errors e (> -1).
+
+    Returns
+    -------
+    ndarray
+        Residual (m) for each error.
+    """
+    from ..plant import ScheduledPlant, free_amplitude
+
+    e = np.asarray(errors, dtype=float).ravel()
+    if not np.all(np.isfinite(e)) or np.any(e <= -1.0):
+        raise ValueError(f"map errors must be finite and > -1, got {e!r}")
+    prep = _prepare(sc, session, motion, motion.t_end + sc.simulation.step)
+    z_end = float(prep.Za[prep.k_end, 0])
+    out = np.empty(e.size)
+    for i, err in enumerate(e.tolist()):
+        plant = ScheduledPlant(sc.modemap.scaled(1.0 + err).scheduled())
+        _step(prep, plant, prep.k_end)
+        st = plant.state
+        out[i] = float(sum(free_amplitude(st[2 * m], st[2 * m + 1], md.at(z_end))
+                           for m, md in enumerate(plant.modes)))
+    return out
 
 
 def _z_samples(session: Any, n: int, h: float) -> np.ndarray:
@@ -447,6 +537,10 @@ class MethodOutcome:
     peaks : dict
         Largest |v|, |a|, |j| of the reference.
     params : dict
+    worst_10pct : float
+        Largest residual (m) over the map errors within ±10 % on the
+        time-varying plant (the reference planned on the nominal map); NaN
+        when not computed.
     """
 
     name: str
@@ -455,6 +549,42 @@ class MethodOutcome:
     run: Any
     peaks: dict[str, float]
     params: dict[str, Any] = field(default_factory=dict)
+    worst_10pct: float = math.nan
+
+
+STATIONARY_LABEL = "stationary mode at f_end (1 + error)"
+"""What the stationary robustness curves vary (printed with them)."""
+
+_STYLES: dict[str, tuple[str | None, str]] = {
+    "AL": ("0.45", "-"), "JL": ("tab:blue", "-"), "DJL": ("tab:red", "-"),
+    "DJL (optimal)": ("darkred", "-."), "DJL (robust)": ("lightcoral", "-."),
+    "time-optimal JL": ("tab:cyan", ":"), "Sato III": ("tab:olive", ":"),
+    "damped jerk": ("tab:brown", ":"),
+    "AL*ZV": ("tab:green", "--"), "AL*ZVD": ("tab:purple", "--"), "AL*MZV": ("tab:pink", "--"),
+    "AL*EI": ("tab:orange", "--"),
+    "JL*ZV": ("tab:green", "-."), "JL*ZVD": ("tab:purple", "-."), "JL*MZV": ("tab:pink", "-."),
+    "JL*EI": ("tab:orange", "-."),
+    "AL*TV-ZV": ("black", "--"), "JL*TV-ZV": ("black", "-."),
+}
+
+
+def _style(name: str) -> tuple[str | None, str]:
+    return _STYLES.get(name, (None, "--"))
+
+
+def _ranking(values: dict[str, float], tie: float) -> list[list[str]]:
+    """Methods grouped by value, best (smallest) first; values within ``tie`` share a group."""
+    items = sorted(((v, n) for n, v in values.items() if not math.isnan(v)),
+                   key=lambda x: x[0])
+    groups: list[list[str]] = []
+    best = math.nan
+    for v, n in items:
+        if groups and (v == best or abs(v - best) <= tie):
+            groups[-1].append(n)
+        else:
+            groups.append([n])
+            best = v
+    return groups
 
 
 @dataclass
@@ -465,7 +595,7 @@ class PeerComparison:
     ----------
     scenario : harness.scenario.Scenario
     methods : dict of str to MethodOutcome
-        AL, JL, DJL then the peers.
+        AL, JL, DJL (and the tuned DJL rows) then the peers.
     band : float
         Settling band (m) and where it comes from (``band_source``).
     T_opt : float
@@ -476,6 +606,15 @@ class PeerComparison:
         Residual on a stationary mode against its frequency error.
     base : harness.results.ScenarioResult
         The harness's own AL / JL / DJL result.
+    map_error : harness.robustness.RobustnessResult, optional
+        Residual of every method when the whole map f(z) of the plant is
+        scaled by 1 + e (time-varying plant, references planned on the
+        nominal map); None when not computed.
+    notes : list of str
+        What was skipped and why.
+    motions : dict
+        Each method's reference: the peers' exact motions, the harness's
+        profiles as their samples.
     """
 
     scenario: Any
@@ -487,6 +626,9 @@ class PeerComparison:
     zeta: float
     robustness: RobustnessCurve
     base: Any
+    map_error: Any = None
+    notes: list[str] = field(default_factory=list)
+    motions: dict[str, Any] = field(default_factory=dict)
 
     def rows(self) -> list[dict[str, Any]]:
         """One dict per method (the CSV rows)."""
@@ -505,6 +647,8 @@ class PeerComparison:
                 "settling_time_s": me.settling_time,
                 "rise_time_s": me.rise_time,
                 "band_m": self.band,
+                "worst_residual_10pct_m": mo.worst_10pct,
+                "worst_residual_10pct_pct_of_AL": 100.0 * mo.worst_10pct / ref.residual,
                 "v_peak_over_v_max": mo.peaks["v"] / sc.move.v_max,
                 "a_peak_over_a_max": mo.peaks["a"] / max(sc.move.a_max, sc.move.d_max),
                 "j_peak_m_s3": mo.peaks["j"],
@@ -512,8 +656,50 @@ class PeerComparison:
             })
         return out
 
+    @property
+    def map_error_label(self) -> str:
+        """What the map-error curves vary (RobustnessResult's label)."""
+        if self.map_error is not None:
+            return str(self.map_error.label)
+        still = not self.scenario.z.moves
+        return ("plant with Z still" if still else "time-varying plant (Z moving)") + \
+            ", whole map scaled by 1 + e"
+
+    def verdict(self) -> list[str]:
+        """Who wins where, with the numbers: least residual, first settled, best worst case.
+
+        Methods within 1e-9 of AL's residual (or 1e-9 s) of each other tie.
+        """
+        al = self.methods["AL"].metrics.residual
+        res = {n: mo.metrics.residual for n, mo in self.methods.items()}
+        st = {n: mo.metrics.settling_time for n, mo in self.methods.items()}
+        wc = {n: mo.worst_10pct for n, mo in self.methods.items()}
+
+        def fmt_res(n: str, v: float) -> str:
+            return f"{n} {v * 1e3:.3g} mm ({100 * v / al:.2g} % of AL)"
+
+        def fmt_t(n: str, v: float) -> str:
+            return f"{n} {v:.3f} s" if math.isfinite(v) else f"{n} never"
+
+        def two(groups: list[list[str]], values: dict[str, float], fmt: Any) -> str:
+            parts = []
+            for g in groups[:2]:
+                parts.append(" = ".join(g[:4]) + (f" (+{len(g) - 4} more)" if len(g) > 4 else "")
+                             + " " + fmt("", values[g[0]]).strip())
+            return "; then ".join(parts) if parts else "-"
+
+        name = self.scenario.name
+        out = [f"Who wins on {name}:",
+               "  least residual: " + two(_ranking(res, 1e-9 * al), res, fmt_res),
+               "  first settled (band +/-" + f"{self.band * 1e3:.3g} mm): "
+               + two(_ranking(st, 1e-9), st, fmt_t)]
+        if any(math.isfinite(v) for v in wc.values()):
+            out.append("  smallest worst case over +/-10 % map error (" + self.map_error_label
+                       + "): " + two(_ranking(wc, 1e-9 * al), wc, fmt_res))
+        return out
+
     def table(self) -> str:
-        """Format the table: motion time, ratio to time-optimal, residual, settling."""
+        """Format the table: motion time, ratio to time-optimal, residual, settling, worst case."""
         sc = self.scenario
         m = sc.move
         f0 = sc.modemap.tuned.f(sc.z.z0)
@@ -526,75 +712,171 @@ class PeerComparison:
                  f"time-optimal JL: {self.T_opt:.4g} s "
                  f"(j_max = a_max / T_F(JL))", ""]
         head = (f"{'method':<16}{'motion [s]':>11}{'/ t.-opt.':>10}{'residual [mm]':>15}"
-                f"{'% of AL':>9}{'settling [s]':>14}{'v/v_max':>9}{'a/a_max':>9}")
+                f"{'% of AL':>9}{'settling [s]':>14}{'worst±10% [mm]':>16}{'v/v_max':>9}"
+                f"{'a/a_max':>9}")
         lines += [head, "-" * len(head)]
         for r in self.rows():
             st = r["settling_time_s"]
+            w = r["worst_residual_10pct_m"]
             lines.append(
                 f"{r['method']:<16}{r['motion_time_s']:>11.3f}"
                 f"{r['motion_time_over_time_optimal']:>10.3f}"
                 f"{r['residual_m'] * 1e3:>15.4g}{r['residual_pct_of_AL']:>8.1f}%"
                 f"{(f'{st:.3f}' if math.isfinite(st) else 'never'):>14}"
+                f"{(f'{w * 1e3:.4g}' if math.isfinite(w) else '-'):>16}"
                 f"{r['v_peak_over_v_max']:>9.2f}{r['a_peak_over_a_max']:>9.2f}")
         lines.append("")
         lines.append(f"Settling band +/-{self.band * 1e3:.3g} mm ({self.band_source}); "
                      "residual: free-oscillation amplitude when the reference ends.")
+        if self.map_error is not None:
+            lines.append(f"worst±10%: largest residual over map errors e in +/-10 % "
+                         f"({self.map_error_label}; each reference planned on the nominal map).")
         for mo in self.methods.values():
             if mo.name not in BASE:
                 lines.append(f"  {mo.name}: {mo.tuned_to}")
+        lines.extend(f"  note: {n}" for n in self.notes)
+        lines.append("")
+        lines.extend(self.verdict())
         return "\n".join(lines)
 
     def to_csv(self, path: Any) -> Any:
-        """Write :meth:`rows` as CSV; return the path (robustness: :meth:`robustness_rows`)."""
+        """Write :meth:`rows` as CSV; return the path.
+
+        The curves: :meth:`robustness_rows`, :meth:`map_error_rows`.
+        """
         from ..results import write_csv
 
         return write_csv(path, self.rows())
 
     def robustness_rows(self) -> list[dict[str, Any]]:
-        """Return the robustness curves as rows (error, method, residual, % of AL)."""
+        """Return the stationary-mode curves as rows (error, method, residual, % of AL)."""
         rc = self.robustness
         pc = rc.percent()
-        return [{"scenario": self.scenario.name, "frequency_error": float(e),
-                 "f_Hz": rc.f_tuned * (1 + float(e)), "method": k,
+        return [{"scenario": self.scenario.name, "plant": STATIONARY_LABEL,
+                 "frequency_error": float(e), "f_Hz": rc.f_tuned * (1 + float(e)), "method": k,
                  "residual_m": float(rc.residual[k][i]), "residual_pct_of_AL": float(pc[k][i])}
                 for k in rc.residual for i, e in enumerate(rc.error)]
 
+    def map_error_rows(self) -> list[dict[str, Any]]:
+        """Return the map-error curves (time-varying plant) as rows; empty if not computed."""
+        if self.map_error is None:
+            return []
+        return [{("method" if k == "profile" else k): v for k, v in r.items()}
+                for r in self.map_error.rows()]
+
+    def _plot_stationary(self, ax: Any, percent: bool) -> None:
+        rc = self.robustness
+        data = rc.percent() if percent else {k: np.maximum(v * 1e3, 1e-9)
+                                              for k, v in rc.residual.items()}
+        for k, v in data.items():
+            c, ls = _style(k)
+            (ax.plot if percent else ax.semilogy)(100 * rc.error, v, color=c, ls=ls, label=k)
+        ax.set_xlabel(f"mode frequency error [%] around {rc.f_tuned:.3g} Hz "
+                      f"({STATIONARY_LABEL})", fontsize="small")
+        ax.grid(True, which="both", alpha=0.3)
+
+    def _plot_map(self, ax: Any, percent: bool) -> None:
+        me = self.map_error
+        al = me.residual["AL"]
+        worst = {}
+        try:
+            worst = me.worst(0.10)
+        except ValueError:
+            pass
+        ax.axvspan(-10, 10, color="0.92", lw=0)
+        for k, v in me.residual.items():
+            c, ls = _style(k)
+            lab = k if k not in worst or percent else f"{k}: worst {worst[k] * 1e3:.3g} mm"
+            if percent:
+                ax.plot(100 * me.errors, 100 * v / al, color=c, ls=ls, label=lab)
+            else:
+                ax.semilogy(100 * me.errors, np.maximum(v * 1e3, 1e-9), color=c, ls=ls,
+                            label=lab)
+        ax.set_xlabel("map error e [%]: the plant's f(z) x (1 + e); references planned "
+                      "on the nominal map", fontsize="small")
+        ax.grid(True, which="both", alpha=0.3)
+
     def plot(self, title: str | None = None):
-        """Residual against the mode-frequency error, one curve per method; return the Figure."""
+        """Residual against the mode-frequency error on a *stationary* mode; return the Figure."""
         import matplotlib.pyplot as plt
 
-        rc = self.robustness
         fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(13, 4.8))
-        pc = rc.percent()
-        styles = {"AL": ("0.45", "-"), "JL": ("tab:blue", "-"), "DJL": ("tab:red", "-")}
-        for k in rc.residual:
-            c, ls = styles.get(k, (None, "--"))
-            ax1.plot(100 * rc.error, pc[k], color=c, ls=ls, label=k)
-            ax2.semilogy(100 * rc.error, np.maximum(rc.residual[k] * 1e3, 1e-9), color=c,
-                         ls=ls, label=k)
+        self._plot_stationary(ax1, True)
+        self._plot_stationary(ax2, False)
         ax1.set_ylim(0, 60)
         ax1.set_ylabel("residual [% of AL at the same frequency]")
         ax2.set_ylabel("residual amplitude [mm]")
-        for ax in (ax1, ax2):
-            ax.set_xlabel(f"mode frequency error [%] around {rc.f_tuned:.3g} Hz")
-            ax.grid(True, alpha=0.3)
         ax2.axhline(self.band * 1e3, color="gold", lw=2, label="settling band")
-        ax2.legend(fontsize="small", ncol=2)
+        ax2.legend(fontsize="x-small", ncol=2)
         fig.suptitle(title or f"Scenario {self.scenario.name}: robustness to the mode "
-                     f"frequency (stationary mode, zeta = {rc.zeta:g}; methods as planned for "
-                     "the scenario)")
+                     f"frequency, {STATIONARY_LABEL}, zeta = {self.robustness.zeta:g} "
+                     "(methods as planned for the scenario)", fontsize="medium")
+        fig.tight_layout()
+        return fig
+
+    def plot_map_error(self, title: str | None = None):
+        """Residual against a map error on the time-varying plant; return the Figure.
+
+        Raises
+        ------
+        ValueError
+            If the map-error curves were not computed.
+        """
+        import matplotlib.pyplot as plt
+
+        if self.map_error is None:
+            raise ValueError("no map-error curves (compare_scenario(..., map_errors=None))")
+        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(13, 4.8))
+        self._plot_map(ax1, True)
+        self._plot_map(ax2, False)
+        ax1.set_ylim(0, 60)
+        ax1.set_ylabel("residual [% of AL at the same map error]")
+        ax2.set_ylabel("residual amplitude [mm]")
+        ax2.axhline(self.band * 1e3, color="gold", lw=2, label="settling band")
+        ax2.legend(fontsize="x-small", ncol=2)
+        fig.suptitle(title or f"Scenario {self.scenario.name}: robustness to a map error, "
+                     f"{self.map_error_label} (shaded: +/-10 %, the worst case)",
+                     fontsize="medium")
+        fig.tight_layout()
+        return fig
+
+    def plot_robustness(self, title: str | None = None):
+        """Both robustness checks side by side (the report's figure); return the Figure.
+
+        Left: stationary mode at ``f_end (1 + error)``; right (when computed):
+        time-varying plant, whole map scaled by 1 + e.
+        """
+        import matplotlib.pyplot as plt
+
+        two = self.map_error is not None
+        fig, axes = plt.subplots(1, 2 if two else 1, figsize=(14, 5.2), squeeze=False)
+        ax1 = axes[0, 0]
+        self._plot_stationary(ax1, False)
+        ax1.set_ylabel("residual amplitude [mm]")
+        ax1.set_title(f"{STATIONARY_LABEL}, zeta = {self.robustness.zeta:g}",
+                      fontsize="medium")
+        ax1.axhline(self.band * 1e3, color="gold", lw=2, label="settling band")
+        ax1.legend(fontsize="x-small", ncol=2)
+        if two:
+            ax2 = axes[0, 1]
+            self._plot_map(ax2, False)
+            ax2.set_ylabel("residual amplitude [mm]")
+            ax2.set_title(self.map_error_label + " (shaded: +/-10 %)", fontsize="medium")
+            ax2.axhline(self.band * 1e3, color="gold", lw=2)
+        fig.suptitle(title or f"Scenario {self.scenario.name}: residual of every method "
+                     "against a frequency error", fontsize="medium")
         fig.tight_layout()
         return fig
 
     def html(self) -> str:
-        """Return an HTML fragment (table and robustness figure, PNG embedded) for a report."""
+        """Return an HTML fragment (table and robustness figures, PNG embedded) for a report."""
         import base64
         import html as _html
         import io
 
         import matplotlib.pyplot as plt
 
-        fig = self.plot()
+        fig = self.plot_robustness()
         buf = io.BytesIO()
         fig.savefig(buf, format="png", dpi=90)
         plt.close(fig)
@@ -611,15 +893,16 @@ class PeerComparison:
         fig, axes = plt.subplots(2, 1, figsize=(11, 7), sharex=True)
         for n, mo in self.methods.items():
             r = mo.run
-            axes[0].plot(r.t, r.a, lw=1, label=n)
-            axes[1].plot(r.t, r.eps * 1e3, lw=1, label=n)
+            c, ls = _style(n)
+            axes[0].plot(r.t, r.a, lw=1, color=c, ls=ls, label=n)
+            axes[1].plot(r.t, r.eps * 1e3, lw=1, color=c, ls=ls, label=n)
         axes[1].axhspan(-self.band * 1e3, self.band * 1e3, color="gold", alpha=0.35, lw=0)
         zoom = max(mo.metrics.residual for n, mo in self.methods.items() if n != "AL")
         axes[1].set_ylim(-3e3 * max(zoom, self.band), 3e3 * max(zoom, self.band))
         axes[0].set_ylabel("a [m/s²]")
         axes[1].set_ylabel("ε [mm] (zoom)")
         axes[1].set_xlabel("t [s]")
-        axes[0].legend(fontsize="small", ncol=4)
+        axes[0].legend(fontsize="x-small", ncol=5)
         for ax in axes:
             ax.grid(True, alpha=0.3)
         fig.suptitle(title or f"Scenario {self.scenario.name}: every method through the plant")
@@ -634,8 +917,19 @@ def stationary_variant(sc: Any) -> Any:
                                description=f"{sc.name} with Z still at {z.z0:g} m")
 
 
+def has_djl_tuning(sc: Any) -> bool:
+    """Whether the harness tunes DJL by other methods than the paper's (``compare.djl_tuning``)."""
+    return hasattr(sc.compare, "djl_tuning")
+
+
+def _T_F_text(T_F: Sequence[float]) -> str:
+    return "T_F " + "/".join(f"{x * 1e3:.0f}" for x in T_F) + " ms"
+
+
 def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str] = PEERS,
-                     errors: np.ndarray | None = None, engine: str = "fmu") -> PeerComparison:
+                     errors: np.ndarray | None = None, engine: str = "fmu",
+                     map_errors: Sequence[float] | np.ndarray | None = MAP_ERRORS,
+                     map_engine: str = "fast", tuned_djl: bool = True) -> PeerComparison:
     """Run AL / JL / DJL and the peers on one (non-sweep) scenario.
 
     Parameters
@@ -645,50 +939,112 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
     session : harness.cosim.Session, optional
         Generator instances to reuse.
     peers : sequence of str
-        Subset of :data:`PEERS`.
+        Subset of :data:`ALL_PEERS` (default :data:`PEERS`).
     errors : ndarray, optional
-        Relative frequency errors of the robustness curves (default -40 % .. +40 %).
+        Relative frequency errors of the stationary-mode robustness curves
+        (default -40 % .. +40 %).
     engine : {"fmu", "fast"}
         Engine of the session made when ``session`` is not given (see
         :class:`harness.cosim.Session`).
+    map_errors : array_like or None
+        Map errors e of the time-varying robustness (the plant's whole f(z)
+        scaled by 1 + e; default :data:`MAP_ERRORS`, -20 % .. +20 %, 41
+        points); the worst case is taken over the points
+        within ±10 %.  None: not computed.
+    map_engine : {"fast", "fmu"}
+        Engine of the map-error runs and of the tuned DJL rows (default the
+        fast engine: the same results, many runs).
+    tuned_djl : bool
+        Add ``DJL (optimal)`` and ``DJL (robust)`` when the harness has
+        ``sc.compare.djl_tuning`` (the ``JL`` and ``DJL`` rows are then run
+        with ``jl_tuning = "end"`` and ``djl_tuning = "paper"`` whatever the
+        scenario says: the harness's JL and the paper's DJL).
 
     Returns
     -------
     PeerComparison
     """
     from ..cosim import Session, profile_metrics, run_case
+    from ..robustness import WORST_SPAN, RobustnessResult, map_error_residuals
     from ..scenario import Scenario, load_scenario
 
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     if sc.is_sweep:
         raise ValueError(f"{sc.name}: compare takes single-move scenarios, not sweeps")
-    sc = dataclasses.replace(sc, compare=dataclasses.replace(sc.compare, profiles=BASE))
+    base_cmp: dict[str, Any] = {"profiles": BASE}
+    if has_djl_tuning(sc):  # the JL and DJL rows are the harness's usual ones
+        base_cmp.update(djl_tuning="paper", jl_tuning="end")
+    sc = dataclasses.replace(sc, compare=dataclasses.replace(sc.compare, **base_cmp))
     own = session is None
     if own:
         session = Session(sc.simulation.fmu, sc.simulation.fmi_version, engine=engine)
+    own_map = False
+    msession = session
+    notes: list[str] = []
     try:
+        if getattr(session, "engine", "fmu") != map_engine and (
+                map_errors is not None or tuned_djl):
+            msession = Session(sc.simulation.fmu, sc.simulation.fmi_version, engine=map_engine)
+            own_map = True
         base = run_case(sc, session)
         band = base.band
         jl = base.profiles["JL"]
-        built = build_peers(sc, jl.T_F[0], jl.metrics.motion_time, peers=peers,
-                            fmi_version=sc.simulation.fmi_version)
         methods: dict[str, MethodOutcome] = {}
         motions: dict[str, Motion | SampledTrajectory] = {}
         for n in BASE:
             p = base.profiles[n]
             st = _run_samples(p.run, n)
             methods[n] = MethodOutcome(n, "harness" if n == "AL" else
-                                       ("T_F " + "/".join(f"{x * 1e3:.0f}" for x in
-                                                          (p.T_F[:1] if n == "JL" else p.T_F))
-                                        + " ms"), p.metrics, p.run, st.peaks())
+                                       _T_F_text(p.T_F[:1] if n == "JL" else p.T_F),
+                                       p.metrics, p.run, st.peaks())
             motions[n] = st
+        # the DJL with the harness's other tuning methods (when it has them)
+        tuned_sc: dict[str, Any] = {}
+        if tuned_djl and has_djl_tuning(sc):
+            for tu in DJL_TUNINGS:
+                name = f"DJL ({tu})"
+                sct = dataclasses.replace(sc, compare=dataclasses.replace(
+                    sc.compare, djl_tuning=tu, profiles=("DJL",), DJL_T_F=None))
+                p = run_case(sct, msession).profiles["DJL"]
+                st = _run_samples(p.run, name)
+                methods[name] = MethodOutcome(
+                    name, f"{_T_F_text(p.T_F)} ({tu} tuning, {map_engine} engine)",
+                    profile_metrics(p.run, band), p.run, st.peaks(),
+                    {"T_F": list(p.T_F), "djl_tuning": tu})
+                motions[name] = st
+                tuned_sc[name] = (sct, tuple(p.T_F))
+        elif tuned_djl:
+            notes.append("DJL (optimal), DJL (robust): skipped, this harness has no "
+                         "compare.djl_tuning yet")
+        built = build_peers(sc, jl.T_F[0], jl.metrics.motion_time, peers=peers,
+                            fmi_version=sc.simulation.fmi_version, session=session)
         for n, (mot, spec) in built.items():
             st = mot.sample(sc.simulation.Te)
             run = cosimulate_reference(sc, session, mot, n)
             methods[n] = MethodOutcome(n, spec.tuned_to, profile_metrics(run, band), run,
                                        st.peaks(), spec.params)
             motions[n] = mot
+        map_result = None
+        if map_errors is not None:
+            e = np.asarray(map_errors, dtype=float).ravel()
+            res: dict[str, np.ndarray] = {}
+            T_F: dict[str, tuple[float, ...] | None] = {}
+            for n in BASE:
+                T_F[n] = None if n == "AL" else tuple(base.profiles[n].T_F)
+                res[n] = map_error_residuals(sc, msession, n, T_F[n], e)
+            for n, (sct, tf) in tuned_sc.items():
+                T_F[n] = tf
+                res[n] = map_error_residuals(sct, msession, "DJL", tf, e)
+            for n, (mot, _) in built.items():
+                T_F[n] = None
+                res[n] = reference_map_error_residuals(sc, msession, mot, e)
+            map_result = RobustnessResult(e, {n: res[n] for n in methods}, sc, T_F)
+            if np.any(np.abs(e) <= WORST_SPAN + 1e-12):
+                for n, w in map_result.worst(WORST_SPAN).items():
+                    methods[n].worst_10pct = w
     finally:
+        if own_map:
+            msession.close()
         if own:
             session.close()
     tm = sc.modemap.tuned
@@ -698,4 +1054,5 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
                          d_max=m.d_max).duration
     err = np.linspace(-0.4, 0.4, 81) if errors is None else np.asarray(errors, dtype=float)
     rc = robustness_curve(motions, f_end, zeta, err, reference="AL")
-    return PeerComparison(sc, methods, band, base.band_source, T_opt, f_end, zeta, rc, base)
+    return PeerComparison(sc, methods, band, base.band_source, T_opt, f_end, zeta, rc, base,
+                          map_result, notes, motions)

@@ -123,7 +123,7 @@ class TimeVaryingZV:
     @classmethod
     def constant(cls, f: float, zeta: float, t0: float, t1: float, *,
                  rule: str = "phase") -> TimeVaryingZV:
-        """The shaper on a mode of constant frequency ``f`` (Hz): the ZV shaper."""
+        """Return the shaper on a mode of constant frequency ``f`` (Hz): the ZV shaper."""
         return cls(lambda t: np.full(np.shape(t), float(f)), zeta, t0, t1, rule=rule)
 
     # ------------------------------------------------------------ the mode
