@@ -13,7 +13,7 @@ import sys
 
 from . import __version__
 
-COMMANDS = ("build", "demo", "simulate", "map", "report", "compare")
+COMMANDS = ("build", "demo", "simulate", "map", "tune", "report", "compare")
 
 EPILOG = """\
 typical use:
@@ -22,15 +22,22 @@ typical use:
       ./djl-fmu-out/simulate (also writes the two FMUs there)
   djl-fmu simulate my_axis.toml
       your moves and mode map (scenario format: docs/harness.md)
+  djl-fmu simulate sweep-X --tuning optimal,robust
+      add DJL tuned on the time-varying model (never worse than JL; robust to a map
+      error), Table 2 for them too (docs/tuning.md)
   djl-fmu map X
       the workspace map: AL/JL/DJL over 10,000 moves on all cores (or a Dask cluster,
       --scheduler ADDRESS); CSV and heat maps in ./djl-fmu-out/map (docs/map.md)
+  djl-fmu tune X --single
+      tuned JL/DJL jerk times (DJL robust by default; a [map] grid: one row per move), as a
+      CSV the FMU or a controller loads, in ./djl-fmu-out/tune (docs/tune.md)
   djl-fmu build --fmi-version 3 -o out/JerkLimitedTrajectory.fmu
       write an FMI 3.0 co-simulation FMU (binary for this platform + C sources)
   djl-fmu report
       check the papers' filtering claims against the FMU, write report.html
-  djl-fmu compare
-      AL/JL/DJL against time-optimal JL, Sato, input shapers, damped jerk
+  djl-fmu compare --engine fast
+      AL/JL/DJL (paper, optimal, robust) against time-optimal JL, Sato, input shapers on
+      AL and JL, a time-varying shaper, damped jerk; worst case under a map error
   djl-fmu demo
       the generator alone: build both FMUs, validate, run the default DJL move
 

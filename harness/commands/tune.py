@@ -1,0 +1,204 @@
+"""``djl-fmu tune``: tuned JL / DJL jerk times per move or over a grid, as a documented CSV."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+from pathlib import Path
+
+DESCRIPTION = """\
+Tune the jerk times of JL and DJL for a move, every case of a [sweep] or every
+point of a [map] grid (Z start, Z travel, distance, v_max), measure the
+residual vibration each leaves (on the nominal mode map and, worst case, with
+the whole map off by up to +/- the map error), print them and write them as a
+CSV file that a controller or the generator FMU can load.
+
+Methods (--tuning, default: DJL robust, JL end):
+  DJL paper     the modal period at the start of each stage (the paper's rule; 3 ms)
+  DJL optimal   least residual on the nominal map (about 0.1 s a move)
+  DJL robust    least worst-case residual over a map error of +/- --map-error
+                (default: the scenario's [compare] map_error, 0.1; about 0.4 s a move)
+  JL  end       the modal period at the end of the motion (the paper's)
+  JL  optimal   least residual on the nominal map
+--tuning takes a bare DJL method (robust, optimal, paper), 'end', or
+'djl=METHOD,jl=METHOD'. The methods come from --tuning, not from the
+scenario's djl_tuning / jl_tuning; its other tuning settings (damping,
+max_motion_time, period_band, djl_rule, tune_mode) apply. Jerk times the
+scenario imposes (JL_T_F, DJL_T_F) are ignored: this command computes them.
+
+What is tuned: a scenario with a [map] table, every grid point in grid order
+(z0, then Z travel, then distance, then v_max varying fastest; --max-moves N:
+the first N); else with a [sweep] table, every case in the sweep's order; else
+its single move. --single tunes the scenario's own move whatever its tables
+(the embedded X and Y have a 10,000-move [map]: 'djl-fmu tune X --single').
+
+The moves run in batches on a pool of processes, one per core by default
+(--workers N), or on a Dask cluster (--scheduler ADDRESS, as for 'djl-fmu
+map'); the CSV is the same file whatever ran it.
+
+Outputs, in --out (default ./djl-fmu-out/tune), written only once every move
+has succeeded:
+  <name>-jerk-times.csv  '#' header (format version, scenario, methods, uncertainty,
+                         Te, units, the meaning of every column, how to set the FMU),
+                         then the column names and one row per move:
+                         z0_m, z_distance_m, distance_m, v_max_m_s, jl_T_F_s,
+                         djl_T_F1_s..djl_T_F4_s, djl_N_F1..djl_N_F4, residual_m,
+                         worst_residual_m, jl_residual_m, jl_worst_residual_m,
+                         motion_time_s, jl_motion_time_s, method, ... (docs/tune.md)
+  summary.txt            what is printed
+FMU: profile = 3 with T_F1..T_F4 = djl_T_F1_s..djl_T_F4_s (DJL), profile = 2 with
+T_F1 = jl_T_F_s (JL). Python: harness.jerktimes.load_jerk_times(path),
+fmu_parameters(row).
+"""
+
+EPILOG = """\
+examples:
+  djl-fmu tune X --single                      scenario X's move, DJL robust (+/-10 %)
+  djl-fmu tune X --single --tuning djl=optimal,jl=optimal
+  djl-fmu tune sweep-X --tuning paper          the 50 cases of the test set, paper's rule
+  djl-fmu tune X --max-moves 200 --workers 2   the first 200 moves of X's [map] grid
+  djl-fmu tune my_axis.toml --map-error 0.15 --scheduler tcp://10.0.0.5:8786
+
+Exit status: 0 on success, 2 for a bad scenario or option (nothing tuned, nothing
+written), 1 if a move fails or the outputs cannot be written (nothing written).
+"""
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``tune`` command."""
+    p = sub.add_parser(
+        "tune",
+        help="tuned JL/DJL jerk times (paper, optimal, robust) per move or over a [map] "
+             "grid: printed and written as a CSV the FMU or a controller can load",
+        description=DESCRIPTION,
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("scenario", metavar="SCENARIO",
+                   help="TOML scenario file, or an embedded scenario name (X, Y, sweep-X, "
+                        "sweep-Y)")
+    p.add_argument("--tuning", default=None, metavar="LIST",
+                   help="tuning methods: a DJL method (paper, optimal, robust), 'end', or "
+                        "'djl=METHOD,jl=METHOD' (default: DJL robust, JL end)")
+    p.add_argument("--map-error", type=float, default=None, metavar="E",
+                   help="relative map error in [0, 1) of the robust method and of the "
+                        "worst-case residuals (default: the scenario's map_error, 0.1)")
+    p.add_argument("--single", action="store_true",
+                   help="tune the scenario's own move only, whatever its [map] or [sweep]")
+    p.add_argument("-o", "--out", type=Path, default=Path("djl-fmu-out") / "tune",
+                   metavar="DIR", help="output folder (default: ./djl-fmu-out/tune)")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="local worker processes (default: one per core; 1 runs in this "
+                        "process, as does a single move)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run on a Dask cluster: the scheduler's address, e.g. "
+                        "tcp://10.0.0.5:8786")
+    p.add_argument("--max-moves", type=int, default=None, metavar="N",
+                   help="tune only the first N moves of the [map] grid or [sweep]")
+    p.add_argument("-q", "--quiet", action="store_true",
+                   help="no progress bar, do not print the table")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Check the inputs, tune, then write the outputs; return the exit status."""
+    from ._common import CommandError
+
+    try:
+        return _run(args)
+    except CommandError as e:
+        print(f"djl-fmu tune: {e}", file=sys.stderr)
+        return e.status
+
+
+def check_out(out: Path) -> None:
+    """Refuse an output folder that cannot be created or written, before anything runs.
+
+    Raises
+    ------
+    CommandError
+        Status 2: ``out`` (or the nearest existing folder above it) is a file,
+        or is not writable.
+    """
+    from ._common import CommandError
+
+    if out.exists() and not out.is_dir():
+        raise CommandError(2, f"--out {out} exists and is not a directory")
+    base = out
+    while not base.exists():
+        if base.parent == base:
+            break
+        base = base.parent
+    if base.exists() and not base.is_dir():
+        raise CommandError(2, f"--out {out}: {base} is a file, not a directory")
+    if base.exists() and not os.access(base, os.W_OK | os.X_OK):
+        raise CommandError(2, f"--out {out}: {base} is not writable")
+
+
+def _run(args: argparse.Namespace) -> int:
+    from ..executors import ExecutorError, make_executor
+    from ..jerktimes import TuneError, parse_tuning, tune_table, with_methods
+    from ..workspace import check_engine
+    from ._common import CommandError, load_scenarios, report_written, write_outputs
+
+    # 1. check everything before running anything
+    if args.workers is not None and args.workers < 1:
+        raise CommandError(2, f"--workers must be >= 1, got {args.workers}")
+    if args.max_moves is not None and args.max_moves < 1:
+        raise CommandError(2, f"--max-moves must be >= 1, got {args.max_moves}")
+    if args.workers is not None and args.scheduler is not None:
+        raise CommandError(2, "give --workers or --scheduler, not both (on a Dask cluster "
+                              "the cluster's workers run the moves)")
+    try:
+        djl, jl = parse_tuning(args.tuning)
+    except ValueError as e:
+        raise CommandError(2, f"--tuning {args.tuning}: {e}") from None
+    if args.map_error is not None and not (math.isfinite(args.map_error)
+                                           and 0.0 <= args.map_error < 1.0):
+        raise CommandError(2, f"--map-error must be in [0, 1) (a relative error, e.g. 0.1), "
+                              f"got {args.map_error:g}")
+    (sc,), (stem,) = load_scenarios([args.scenario], None, None, args.out)
+    check_out(args.out)
+    try:
+        sc = with_methods(sc, djl, jl, args.map_error)
+    except ValueError as e:
+        raise CommandError(2, f"scenario {sc.name} ({sc.source}): {e}") from None
+    try:
+        check_engine("fast")
+    except ValueError as e:
+        raise CommandError(2, f"the tuning searches need the compiled engine: {e}") from None
+
+    # 2. run (nothing is written yet); the executor is set up first, so that a bad
+    #    scheduler address is reported as a bad option
+    workers = args.workers
+    single = args.single or (sc.map is None and not sc.is_sweep)
+    if single and args.scheduler is None:
+        workers = 1
+    if not single and not args.quiet:
+        n = sc.map_size if sc.map is not None else len(sc.cases())
+        what = "[map] grid" if sc.map is not None else "[sweep]"
+        todo = min(n, args.max_moves) if args.max_moves else n
+        print(f"djl-fmu tune: {todo} of the {n} moves of the {what} of {sc.name} "
+              f"(--single: the scenario's own move; --max-moves N: the first N)",
+              file=sys.stderr)
+    try:
+        with make_executor(workers, args.scheduler) as ex:
+            try:
+                tab = tune_table(sc, djl_method=djl, jl_method=jl, map_error=args.map_error,
+                                 max_moves=args.max_moves, progress=not args.quiet,
+                                 executor=ex, single=args.single)
+            except (TuneError, ValueError, OSError) as e:
+                raise CommandError(1, f"tuning failed ({sc.name}): {e}") from None
+    except ExecutorError as e:
+        raise CommandError(2, str(e)) from None
+    summary = tab.table()
+
+    # 3. write everything, or nothing
+    def write(written: list[Path]) -> None:
+        written.append(tab.to_csv(args.out / f"{stem}-jerk-times.csv"))
+
+    written = write_outputs(args.out, write, summary)
+    report_written(args.out, written, summary, args.quiet)
+    return 0
