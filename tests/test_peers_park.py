@@ -171,3 +171,14 @@ def test_negative_move_is_mirrored():
     assert p.T == q.T
     t = np.linspace(0, q.total_time, 11)
     np.testing.assert_allclose(p.motion().evaluate(t)[0], -q.motion().evaluate(t)[0])
+
+
+def test_phase_shorter_than_the_time_resolution_is_folded():
+    """A closed form can leave a phase of 1e-17 s (found by hypothesis: P = -1, V = 0.01,
+    A = 0.1, J = 1): the motion is still built, lands on P at rest, breakpoints increasing."""
+    p = park_profile(-1.0, 0.010000000000000002, 0.1, 1.0)
+    assert min(t for t in p.T if t > 0) < 1e-15
+    m = p.motion()
+    assert np.all(np.diff(m.tb) > 0)
+    assert m.x[-1] == pytest.approx(-1.0, rel=1e-10)
+    assert abs(m.v[-1]) <= 1e-12 and abs(m.a[-1]) <= 1e-12

@@ -209,7 +209,8 @@ class PiecewiseJerk(Motion):
         Parameters
         ----------
         durations : sequence of float
-            Phase durations (s, >= 0; zero-length phases are dropped).
+            Phase durations (s, >= 0; zero-length phases are dropped, and one too
+            short to advance the time at its start is folded into the state there).
         jerks : sequence of float
             Jerk of each phase (m/s³).
         t0, x0, v0, a0 : float
@@ -229,10 +230,19 @@ class PiecewiseJerk(Motion):
         xs, vs, as_, js = [x0], [v0], [a0], []
         for h, jj in zip(d, jr, strict=True):
             x, v, a = xs[-1], vs[-1], as_[-1]
+            x1 = x + v * h + a * h * h / 2 + jj * h ** 3 / 6
+            v1 = v + a * h + jj * h * h / 2
+            a1 = a + jj * h
+            if tb[-1] + h <= tb[-1]:
+                # a phase shorter than the time resolution at tb[-1] (e.g. 1e-17 s left by
+                # rounding in a closed-form solution): its tiny state change is folded into
+                # the breakpoint, which stays strictly increasing
+                xs[-1], vs[-1], as_[-1] = x1, v1, a1
+                continue
             js.append(jj)
-            xs.append(x + v * h + a * h * h / 2 + jj * h ** 3 / 6)
-            vs.append(v + a * h + jj * h * h / 2)
-            as_.append(a + jj * h)
+            xs.append(x1)
+            vs.append(v1)
+            as_.append(a1)
             tb.append(tb[-1] + h)
         js.append(0.0)
         return cls(np.array(tb), np.array(xs), np.array(vs), np.array(as_), np.array(js),
