@@ -114,6 +114,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="fmu (default): the generator FMUs stepped through fmpy (the "
                         "reference); fast: the same generator core and plant compiled, called "
                         "once per move")
+    p.add_argument("--map-error", type=float, default=None, metavar="E",
+                   help="uncertainty of the robust DJL's tuning: the whole mode map off by up to "
+                        "+/-E (default: the scenario's map_error, 0.1)")
     p.add_argument("--no-plot", action="store_true", help="do not write the PNG figures")
     p.add_argument("-q", "--quiet", action="store_true", help="do not print the tables")
     p.set_defaults(func=run)
@@ -135,6 +138,7 @@ def _run(args: argparse.Namespace) -> int:
     from ..peers.ruckig_ref import ruckig_available
     from ._common import (
         CommandError,
+        apply_tuning,
         check_stems,
         load_scenarios,
         report_written,
@@ -156,6 +160,7 @@ def _run(args: argparse.Namespace) -> int:
         raise CommandError(2, "--timeopt must be >= 0")
     scenarios, _ = load_scenarios(args.scenarios or ["X", "Y"], args.fmu, args.fmi_version,
                                   args.out)
+    scenarios = apply_tuning(scenarios, [], args.map_error)
     sweeps = [s.name for s in scenarios if s.is_sweep]
     if sweeps:
         raise CommandError(2, f"{', '.join(sweeps)}: sweeps are not compared (give "
