@@ -567,15 +567,14 @@ def run_scenario(scenario: Scenario | str | Path, *, fmu: str | Path | None = No
     if fmu is not None or fmi_version is not None:
         sc = sc.with_fmu(Path(fmu) if fmu is not None else None, fmi_version)
     own = session is None
-    if session is None:
-        if engine is None:
-            engine = "fast" if sc.is_sweep else "fmu"
-        session = Session(sc.simulation.fmu, sc.simulation.fmi_version, engine=engine)
+    if engine is None:
+        engine = session.engine if session is not None else ("fast" if sc.is_sweep else "fmu")
     if robustness == "auto":
         robustness = "worst" if sc.is_sweep else "curves"
-    if sc.is_sweep and session is None and (workers != 1 or scheduler is not None):
-        return _run_sweep_parallel(sc, engine or "fast", robustness, workers, scheduler,
-                                   progress)
+    if sc.is_sweep and own and (workers != 1 or scheduler is not None):
+        return _run_sweep_parallel(sc, engine, robustness, workers, scheduler, progress)
+    if session is None:
+        session = Session(sc.simulation.fmu, sc.simulation.fmi_version, engine=engine)
     # the many map-error runs go to the fast engine (same results), unless the scenario names
     # its own FMU file: its generator may differ from the package's, so it runs them itself
     own_fmu = session.fmu is not None or sc.simulation.fmu is not None

@@ -282,3 +282,22 @@ def test_bad_tuning_option_is_exit_2(tmp_path, capsys):
     assert main(["simulate", "Y", "--tuning", "robust", "--workers", "0", "-o",
                  str(tmp_path / "o")]) == 2
     assert not (tmp_path / "o").exists()
+
+
+def test_a_sweep_on_two_processes_equals_the_serial_run():
+    """run_scenario(workers=2) farms the cases out (with the tuned variants) and gives the
+    same rows as the serial run; the worker processes do the work."""
+    import os
+
+    from harness.cosim import run_scenario
+
+    sc = load_scenario("sweep-Y")
+    sc = dataclasses.replace(
+        sc, sweep=dataclasses.replace(sc.sweep, distance=(0.2,), z_distance=(0.1, 0.4)),
+        compare=dataclasses.replace(sc.compare, profiles=("AL", "JL", "DJL", "DJL-optimal")))
+    serial = run_scenario(sc, workers=1)
+    before = os.times().children_user
+    par = run_scenario(sc, workers=2)
+    assert os.times().children_user > before  # computed in the workers
+    assert par.rows() == serial.rows()
+    assert len(par.cases) == 4
