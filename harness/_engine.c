@@ -617,7 +617,7 @@ static PyObject *engine_step_modes(PyObject *self, PyObject *args)
     Py_ssize_t n, nm, k, i;
     Py_buffer ba, bj, bf, bz, bg, bst, be, bss;
     const double *a, *j, *f, *zeta, *gain;
-    double *st, *eps, *states;
+    double *st, *eps, *states, *cache = NULL;
     const double two_pi = DJL_TWO_PI;
     (void)self;
     if (!PyArg_ParseTuple(args, "OOdOOOnOOO", &oa, &oj, &h, &of, &oz, &og, &n, &ost, &oe, &oss))
@@ -662,6 +662,11 @@ static PyObject *engine_step_modes(PyObject *self, PyObject *args)
             goto fail_all;
         }
     }
+    cache = (double *)PyMem_Calloc((size_t)(6 * nm), sizeof(double));
+    if (!cache) {
+        PyErr_NoMemory();
+        goto fail_all;
+    }
     Py_BEGIN_ALLOW_THREADS
     {
         double total = 0.0;
@@ -675,30 +680,47 @@ static PyObject *engine_step_modes(PyObject *self, PyObject *args)
     for (k = 0; k < n; k++) {
         double total = 0.0;
         for (i = 0; i < nm; i++) {
-            /* harness.plant.step_mode_jerk, operation for operation */
-            double omega = two_pi * f[i * n + k];
+            /* harness.plant.step_mode_jerk, operation for operation; the transition terms
+             * depend on the frequency only: reused while it does not change (after the
+             * motions, most of a record), the same values, not recomputed */
+            double *cc = &cache[6 * i];
+            double f_ik = f[i * n + k];
             double z = zeta[i], g = gain[i];
-            double sig = z * omega;
-            double w2 = omega * omega;
-            double wd = omega * sqrt(1.0 - z * z);
-            double e = exp(-sig * h);
-            double c = cos(wd * h);
-            double s = sin(wd * h) / wd;
-            double beta = -g * j[k] / w2;
-            double alpha = (-g * a[k] - 2.0 * sig * beta) / w2;
-            double d1 = st[2 * i] - alpha;
-            double d2 = st[2 * i + 1] - beta;
-            double e1 = alpha + beta * h + e * ((c + sig * s) * d1 + s * d2);
-            double e2 = beta + e * (-w2 * s * d1 + (c - sig * s) * d2);
-            st[2 * i] = e1;
-            st[2 * i + 1] = e2;
-            states[(k + 1) * 2 * nm + 2 * i] = e1;
-            states[(k + 1) * 2 * nm + 2 * i + 1] = e2;
-            total += e1;
+            double sig, w2, e, c, s;
+            if (f_ik != cc[0] || k == 0) {
+                double omega = two_pi * f_ik;
+                double wd = omega * sqrt(1.0 - z * z);
+                cc[0] = f_ik;
+                cc[1] = sig = z * omega;
+                cc[2] = w2 = omega * omega;
+                cc[3] = e = exp(-sig * h);
+                cc[4] = c = cos(wd * h);
+                cc[5] = s = sin(wd * h) / wd;
+            } else {
+                sig = cc[1];
+                w2 = cc[2];
+                e = cc[3];
+                c = cc[4];
+                s = cc[5];
+            }
+            {
+                double beta = -g * j[k] / w2;
+                double alpha = (-g * a[k] - 2.0 * sig * beta) / w2;
+                double d1 = st[2 * i] - alpha;
+                double d2 = st[2 * i + 1] - beta;
+                double e1 = alpha + beta * h + e * ((c + sig * s) * d1 + s * d2);
+                double e2 = beta + e * (-w2 * s * d1 + (c - sig * s) * d2);
+                st[2 * i] = e1;
+                st[2 * i + 1] = e2;
+                states[(k + 1) * 2 * nm + 2 * i] = e1;
+                states[(k + 1) * 2 * nm + 2 * i + 1] = e2;
+                total += e1;
+            }
         }
         eps[k + 1] = total;
     }
     Py_END_ALLOW_THREADS
+    PyMem_Free(cache);
     PyBuffer_Release(&bss);
     PyBuffer_Release(&be);
     PyBuffer_Release(&bst);

@@ -73,6 +73,7 @@ class FastAxis:
         self.start_time = 0.0
         self._plan: Any = None
         self._values: dict[str, Any] = dict(_DEFAULTS)
+        self._sync_cache: dict[Any, tuple[float, float, bool]] = {}
 
     # ------------------------------------------------------------ planning
 
@@ -128,11 +129,20 @@ class FastAxis:
         The bisection of :func:`~harness.planner.sync_z_velocity`, compiled; the
         axis is left planned with the result, as the FMU's is.
         """
-        try:
-            v, T, ok = _engine.sync_velocity(dict(params), float(target_time), float(v_cap),
-                                             float(start_time))
-        except PlanError as e:
-            raise PlanError(f"{self.name}: {e}") from None
+        key = (tuple(sorted((k, tuple(v) if isinstance(v, (list, tuple)) else v)
+                            for k, v in params.items())),
+               float(target_time), float(v_cap), float(start_time))
+        got = self._sync_cache.get(key)
+        if got is None:  # the same synchronisation recurs (tuning, then the run): memoised
+            try:
+                got = _engine.sync_velocity(dict(params), float(target_time), float(v_cap),
+                                            float(start_time))
+            except PlanError as e:
+                raise PlanError(f"{self.name}: {e}") from None
+            if len(self._sync_cache) >= 512:
+                self._sync_cache.clear()
+            self._sync_cache[key] = got
+        v, T, ok = got
         self.plan({**params, "v_max": v}, start_time)
         return v, T, ok
 
