@@ -160,7 +160,8 @@ def save_figure(fig: Any, path: str | Path, dpi: int = 110) -> Path:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
     os.close(fd)
     try:
-        fig.savefig(tmp, dpi=dpi)
+        # PNG level 1: a third of the encoding time of the default, files ~15 % larger
+        fig.savefig(tmp, dpi=dpi, pil_kwargs={"compress_level": 1})
         os.chmod(tmp, _umask_mode())
         os.replace(tmp, path)
     except BaseException:
