@@ -30,12 +30,19 @@ static void logger2(void *env, model_status st, const char *category, const char
 #define MASK_GET (MS_INIT | MS_STEP | MS_TERMINATED | MS_ERROR)
 #define MASK_SET (MS_INSTANTIATED | MS_INIT | MS_STEP)
 #define MASK_FMUSTATE (MS_INSTANTIATED | MS_INIT | MS_STEP | MS_TERMINATED)
+/* after an error, a formerly stored FMU state may be restored (FMI 2.0.4, 2.1.3) */
+#define MASK_RESTORE (MASK_FMUSTATE | MS_ERROR)
 
 #define INST(c) ((inst2 *)(c))
 #define CHECK(c, fn, mask)                                                                       \
     do {                                                                                         \
         if (!(c)) return fmi2Error;                                                              \
         if (!model_allowed(&INST(c)->m, fn, mask)) return fmi2Error;                             \
+    } while (0)
+/* A pointer argument that must not be NULL: refused, the instance unchanged. */
+#define NEED(c, fn, ptr)                                                                         \
+    do {                                                                                         \
+        if (!(ptr)) return (fmi2Status)model_null_arg(&INST(c)->m, fn, #ptr);                    \
     } while (0)
 
 static fmi2Status unsupported(fmi2Component c, const char *fn)
@@ -55,8 +62,8 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
                                const fmi2String categories[])
 {
     CHECK(c, "fmi2SetDebugLogging", MASK_ANY);
-    return (fmi2Status)model_set_debug_logging(&INST(c)->m, loggingOn != fmi2False, nCategories,
-                                               categories);
+    return (fmi2Status)model_set_debug_logging(&INST(c)->m, "fmi2SetDebugLogging",
+                                               loggingOn != fmi2False, nCategories, categories);
 }
 
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
@@ -136,7 +143,8 @@ fmi2Status fmi2Terminate(fmi2Component c)
 
 fmi2Status fmi2Reset(fmi2Component c)
 {
-    CHECK(c, "fmi2Reset", MASK_ANY);
+    /* always allowed: whatever state the instance is in, Reset brings it back */
+    if (!c) return fmi2Error;
     model_reset(&INST(c)->m);
     return fmi2OK;
 }
@@ -148,10 +156,8 @@ static fmi2Status get_values(fmi2Component c, const char *fn, const fmi2ValueRef
 {
     size_t k;
     CHECK(c, fn, MASK_GET);
-    if (nvr > 0 && !vr) {
-        model_fail(&INST(c)->m, "%s: null value references", fn);
-        return fmi2Error;
-    }
+    if (nvr > 0 && !vr) return (fmi2Status)model_null_arg(&INST(c)->m, fn, "vr");
+    if (nvr > 0 && !r && !i && !b) return (fmi2Status)model_null_arg(&INST(c)->m, fn, "value");
     for (k = 0; k < nvr; k++) {
         double v = 0.0;
         if (model_get(&INST(c)->m, vr[k], type, &v) != ST_OK) return fmi2Error;
@@ -183,11 +189,12 @@ fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                          fmi2String value[])
 {
-    (void)value;
     CHECK(c, "fmi2GetString", MASK_GET);
     if (nvr == 0) return fmi2OK;
+    NEED(c, "fmi2GetString", vr);
+    NEED(c, "fmi2GetString", value);
     model_fail(&INST(c)->m, "fmi2GetString: unknown value reference %u (this FMU has no String "
-               "variables)", vr ? vr[0] : 0u);
+               "variables)", vr[0]);
     return fmi2Error;
 }
 
@@ -197,10 +204,8 @@ static fmi2Status set_values(fmi2Component c, const char *fn, const fmi2ValueRef
 {
     size_t k;
     CHECK(c, fn, MASK_SET);
-    if (nvr > 0 && !vr) {
-        model_fail(&INST(c)->m, "%s: null value references", fn);
-        return fmi2Error;
-    }
+    if (nvr > 0 && !vr) return (fmi2Status)model_null_arg(&INST(c)->m, fn, "vr");
+    if (nvr > 0 && !r && !i && !b) return (fmi2Status)model_null_arg(&INST(c)->m, fn, "value");
     for (k = 0; k < nvr; k++) {
         double v = r ? r[k] : i ? (double)i[k] : (b[k] ? 1.0 : 0.0);
         if (model_set(&INST(c)->m, vr[k], type, v) != ST_OK) return fmi2Error;
@@ -229,11 +234,12 @@ fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                          const fmi2String value[])
 {
-    (void)value;
     CHECK(c, "fmi2SetString", MASK_SET);
     if (nvr == 0) return fmi2OK;
+    NEED(c, "fmi2SetString", vr);
+    NEED(c, "fmi2SetString", value);
     model_fail(&INST(c)->m, "fmi2SetString: unknown value reference %u (this FMU has no String "
-               "variables)", vr ? vr[0] : 0u);
+               "variables)", vr[0]);
     return fmi2Error;
 }
 
@@ -244,19 +250,17 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
     inst2 *s = INST(c);
     model_data *d;
     CHECK(c, "fmi2GetFMUstate", MASK_FMUSTATE);
-    if (!FMUstate) {
-        model_fail(&s->m, "fmi2GetFMUstate: null pointer");
-        return fmi2Error;
-    }
+    NEED(c, "fmi2GetFMUstate", FMUstate);
     d = (model_data *)*FMUstate;
+    if (d && model_state_check(&s->m, "fmi2GetFMUstate (state to overwrite)", d,
+                               sizeof(model_data)) != ST_OK)
+        return fmi2Error;
     if (!d) {
         d = (model_data *)s->cb.allocateMemory(1, sizeof(model_data));
-        if (!d) {
-            model_fail(&s->m, "fmi2GetFMUstate: out of memory");
-            return fmi2Error;
-        }
+        if (!d) return (fmi2Status)model_refuse(&s->m, "fmi2GetFMUstate: out of memory");
     }
     memcpy(d, &s->m.d, sizeof(model_data));
+    model_state_seal(d);
     *FMUstate = d;
     return fmi2OK;
 }
@@ -264,8 +268,9 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 {
     inst2 *s = INST(c);
-    CHECK(c, "fmi2SetFMUstate", MASK_FMUSTATE);
-    if (model_state_check(&s->m, FMUstate, sizeof(model_data)) != ST_OK) return fmi2Error;
+    CHECK(c, "fmi2SetFMUstate", MASK_RESTORE);
+    if (model_state_check(&s->m, "fmi2SetFMUstate", FMUstate, sizeof(model_data)) != ST_OK)
+        return fmi2Error;
     memcpy(&s->m.d, FMUstate, sizeof(model_data));
     return fmi2OK;
 }
@@ -274,7 +279,8 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
     inst2 *s = INST(c);
     if (!s) return fmi2Error;
-    if (!FMUstate || !*FMUstate) return fmi2OK;
+    NEED(c, "fmi2FreeFMUstate", FMUstate);
+    if (!*FMUstate) return fmi2OK; /* the standard: a NULL state is ignored */
     s->cb.freeMemory(*FMUstate);
     *FMUstate = NULL;
     return fmi2OK;
@@ -283,8 +289,8 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size)
 {
     CHECK(c, "fmi2SerializedFMUstateSize", MASK_FMUSTATE);
-    (void)FMUstate;
-    if (!size) return fmi2Error;
+    NEED(c, "fmi2SerializedFMUstateSize", FMUstate);
+    NEED(c, "fmi2SerializedFMUstateSize", size);
     *size = model_state_size();
     return fmi2OK;
 }
@@ -294,12 +300,13 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
 {
     inst2 *s = INST(c);
     CHECK(c, "fmi2SerializeFMUstate", MASK_FMUSTATE);
-    if (model_state_check(&s->m, FMUstate, sizeof(model_data)) != ST_OK) return fmi2Error;
-    if (!serializedState || size < model_state_size()) {
-        model_fail(&s->m, "fmi2SerializeFMUstate: buffer of %lu bytes, %lu needed",
-                   (unsigned long)size, (unsigned long)model_state_size());
+    if (model_state_check(&s->m, "fmi2SerializeFMUstate", FMUstate, sizeof(model_data)) != ST_OK)
         return fmi2Error;
-    }
+    NEED(c, "fmi2SerializeFMUstate", serializedState);
+    if (size < model_state_size())
+        return (fmi2Status)model_refuse(&s->m, "fmi2SerializeFMUstate: buffer of %lu bytes, %lu "
+                                        "needed", (unsigned long)size,
+                                        (unsigned long)model_state_size());
     memcpy(serializedState, FMUstate, model_state_size());
     return fmi2OK;
 }
@@ -309,16 +316,18 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
 {
     inst2 *s = INST(c);
     model_data *d;
-    CHECK(c, "fmi2DeSerializeFMUstate", MASK_FMUSTATE);
-    if (!FMUstate) return fmi2Error;
-    if (model_state_check(&s->m, serializedState, size) != ST_OK) return fmi2Error;
+    CHECK(c, "fmi2DeSerializeFMUstate", MASK_RESTORE);
+    NEED(c, "fmi2DeSerializeFMUstate", FMUstate);
+    NEED(c, "fmi2DeSerializeFMUstate", serializedState);
+    if (model_state_check(&s->m, "fmi2DeSerializeFMUstate", serializedState, size) != ST_OK)
+        return fmi2Error;
     d = (model_data *)*FMUstate;
+    if (d && model_state_check(&s->m, "fmi2DeSerializeFMUstate (state to overwrite)", d,
+                               sizeof(model_data)) != ST_OK)
+        return fmi2Error;
     if (!d) {
         d = (model_data *)s->cb.allocateMemory(1, sizeof(model_data));
-        if (!d) {
-            model_fail(&s->m, "fmi2DeSerializeFMUstate: out of memory");
-            return fmi2Error;
-        }
+        if (!d) return (fmi2Status)model_refuse(&s->m, "fmi2DeSerializeFMUstate: out of memory");
     }
     memcpy(d, serializedState, sizeof(model_data));
     *FMUstate = d;
@@ -452,7 +461,7 @@ fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *va
 {
     (void)s;
     CHECK(c, "fmi2GetStatus", MS_STEP | MS_TERMINATED);
-    if (!value) return fmi2Error;
+    NEED(c, "fmi2GetStatus", value);
     *value = fmi2OK;
     return fmi2OK;
 }
@@ -461,7 +470,8 @@ fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *
 {
     inst2 *st = INST(c);
     CHECK(c, "fmi2GetRealStatus", MS_STEP | MS_TERMINATED);
-    if (s != fmi2LastSuccessfulTime || !value) {
+    NEED(c, "fmi2GetRealStatus", value);
+    if (s != fmi2LastSuccessfulTime) {
         model_fail(&st->m, "fmi2GetRealStatus: only fmi2LastSuccessfulTime is available");
         return fmi2Error;
     }
@@ -481,7 +491,8 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Int
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value)
 {
     CHECK(c, "fmi2GetBooleanStatus", MS_STEP | MS_TERMINATED);
-    if (s != fmi2Terminated || !value) {
+    NEED(c, "fmi2GetBooleanStatus", value);
+    if (s != fmi2Terminated) {
         model_fail(&INST(c)->m, "fmi2GetBooleanStatus: only fmi2Terminated is available");
         return fmi2Error;
     }

@@ -26,12 +26,19 @@ static void logger3(void *env, model_status st, const char *category, const char
 #define MASK_GET (MS_INSTANTIATED | MS_INIT | MS_STEP | MS_TERMINATED | MS_ERROR)
 #define MASK_SET (MS_INSTANTIATED | MS_INIT | MS_STEP)
 #define MASK_FMUSTATE (MS_INSTANTIATED | MS_INIT | MS_STEP | MS_TERMINATED)
+/* after an error, a formerly stored FMU state may be restored */
+#define MASK_RESTORE (MASK_FMUSTATE | MS_ERROR)
 
 #define INST(c) ((inst3 *)(c))
 #define CHECK(c, fn, mask)                                                                       \
     do {                                                                                         \
         if (!(c)) return fmi3Error;                                                              \
         if (!model_allowed(&INST(c)->m, fn, mask)) return fmi3Error;                             \
+    } while (0)
+/* A pointer argument that must not be NULL: refused, the instance unchanged. */
+#define NEED(c, fn, ptr)                                                                         \
+    do {                                                                                         \
+        if (!(ptr)) return (fmi3Status)model_null_arg(&INST(c)->m, fn, #ptr);                    \
     } while (0)
 
 static fmi3Status unsupported(fmi3Instance c, const char *fn)
@@ -50,8 +57,8 @@ fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, siz
                                const fmi3String categories[])
 {
     CHECK(instance, "fmi3SetDebugLogging", MASK_ANY);
-    return (fmi3Status)model_set_debug_logging(&INST(instance)->m, loggingOn, nCategories,
-                                               categories);
+    return (fmi3Status)model_set_debug_logging(&INST(instance)->m, "fmi3SetDebugLogging",
+                                               loggingOn, nCategories, categories);
 }
 
 static void log_early(fmi3InstanceEnvironment env, fmi3LogMessageCallback log, const char *msg)
@@ -177,7 +184,8 @@ fmi3Status fmi3Terminate(fmi3Instance instance)
 
 fmi3Status fmi3Reset(fmi3Instance instance)
 {
-    CHECK(instance, "fmi3Reset", MASK_ANY);
+    /* always allowed: whatever state the instance is in, Reset brings it back */
+    if (!instance) return fmi3Error;
     model_reset(&INST(instance)->m);
     return fmi3OK;
 }
@@ -200,24 +208,34 @@ static fmi3Status access(fmi3Instance instance, const char *fn, int set, char ty
     inst3 *s = INST(instance);
     size_t k, j = 0;
     unsigned int e;
+    const void *values = set ? (io.r_in ? (const void *)io.r_in : io.i_in ? (const void *)io.i_in
+                                                                          : (const void *)io.b_in)
+                             : (io.r_out ? (void *)io.r_out : io.i_out ? (void *)io.i_out
+                                                                       : (void *)io.b_out);
     CHECK(instance, fn, set ? MASK_SET : MASK_GET);
-    if (nvr > 0 && !vr) {
-        model_fail(&s->m, "%s: null value references", fn);
-        return fmi3Error;
-    }
+    if (nvr > 0 && !vr) return (fmi3Status)model_null_arg(&s->m, fn, "valueReferences");
+    if ((nvr > 0 || nValues > 0) && !values)
+        return (fmi3Status)model_null_arg(&s->m, fn, "values");
+    /* check every reference and the count before reading or writing anything */
     for (k = 0; k < nvr; k++) {
         model_var v;
         if (!model_lookup(vr[k], 1, &v)) {
             model_fail(&s->m, "%s: unknown value reference %u", fn, vr[k]);
             return fmi3Error;
         }
+        j += v.size;
+    }
+    if (j != nValues) {
+        model_fail(&s->m, "%s: nValues = %lu, but the variables requested hold %lu values", fn,
+                   (unsigned long)nValues, (unsigned long)j);
+        return fmi3Error;
+    }
+    j = 0;
+    for (k = 0; k < nvr; k++) {
+        model_var v;
+        model_lookup(vr[k], 1, &v);
         for (e = 0; e < v.size; e++, j++) {
             double x = 0.0;
-            if (j >= nValues) {
-                model_fail(&s->m, "%s: nValues = %lu is too small for the variables requested",
-                           fn, (unsigned long)nValues);
-                return fmi3Error;
-            }
             if (set) {
                 x = io.r_in ? io.r_in[j] : io.i_in ? (double)io.i_in[j] : (io.b_in[j] ? 1.0 : 0.0);
                 if (model_set(&s->m, v.base + e, type, x) != ST_OK) return fmi3Error;
@@ -228,11 +246,6 @@ static fmi3Status access(fmi3Instance instance, const char *fn, int set, char ty
                 if (io.b_out) io.b_out[j] = x != 0.0;
             }
         }
-    }
-    if (j != nValues) {
-        model_fail(&s->m, "%s: nValues = %lu, but the variables requested hold %lu values", fn,
-                   (unsigned long)nValues, (unsigned long)j);
-        return fmi3Error;
     }
     return fmi3OK;
 }
@@ -287,12 +300,14 @@ fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference valueR
 
 /* Types this FMU does not use: any value reference is unknown. */
 static fmi3Status no_such_type(fmi3Instance instance, const char *fn, int set,
-                               const fmi3ValueReference vr[], size_t nvr)
+                               const fmi3ValueReference vr[], size_t nvr, const void *values)
 {
     CHECK(instance, fn, set ? MASK_SET : MASK_GET);
     if (nvr == 0) return fmi3OK;
+    if (!vr) return (fmi3Status)model_null_arg(&INST(instance)->m, fn, "valueReferences");
+    if (!values) return (fmi3Status)model_null_arg(&INST(instance)->m, fn, "values");
     model_fail(&INST(instance)->m, "%s: value reference %u is not a variable of this type", fn,
-               vr ? vr[0] : 0u);
+               vr[0]);
     return fmi3Error;
 }
 
@@ -300,17 +315,17 @@ static fmi3Status no_such_type(fmi3Instance instance, const char *fn, int set,
     fmi3Status fmi3Get##NAME(fmi3Instance instance, const fmi3ValueReference valueReferences[], \
                              size_t nValueReferences, T values[], size_t nValues)               \
     {                                                                                           \
-        (void)values;                                                                           \
         (void)nValues;                                                                          \
-        return no_such_type(instance, "fmi3Get" #NAME, 0, valueReferences, nValueReferences);   \
+        return no_such_type(instance, "fmi3Get" #NAME, 0, valueReferences, nValueReferences,    \
+                            (const void *)values);                                              \
     }
 #define NO_SUCH_SET(NAME, T)                                                                    \
     fmi3Status fmi3Set##NAME(fmi3Instance instance, const fmi3ValueReference valueReferences[], \
                              size_t nValueReferences, const T values[], size_t nValues)         \
     {                                                                                           \
-        (void)values;                                                                           \
         (void)nValues;                                                                          \
-        return no_such_type(instance, "fmi3Set" #NAME, 1, valueReferences, nValueReferences);   \
+        return no_such_type(instance, "fmi3Set" #NAME, 1, valueReferences, nValueReferences,    \
+                            (const void *)values);                                              \
     }
 
 NO_SUCH_GET(Float32, fmi3Float32)
@@ -336,45 +351,53 @@ fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference valueRe
                          size_t nValueReferences, size_t valueSizes[], fmi3Binary values[],
                          size_t nValues)
 {
-    (void)valueSizes;
-    (void)values;
     (void)nValues;
-    return no_such_type(instance, "fmi3GetBinary", 0, valueReferences, nValueReferences);
+    if (instance && nValueReferences > 0 && !valueSizes)
+        return (fmi3Status)model_null_arg(&INST(instance)->m, "fmi3GetBinary", "valueSizes");
+    return no_such_type(instance, "fmi3GetBinary", 0, valueReferences, nValueReferences,
+                        (const void *)values);
 }
 
 fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                          size_t nValueReferences, const size_t valueSizes[],
                          const fmi3Binary values[], size_t nValues)
 {
-    (void)valueSizes;
-    (void)values;
     (void)nValues;
-    return no_such_type(instance, "fmi3SetBinary", 1, valueReferences, nValueReferences);
+    if (instance && nValueReferences > 0 && !valueSizes)
+        return (fmi3Status)model_null_arg(&INST(instance)->m, "fmi3SetBinary", "valueSizes");
+    return no_such_type(instance, "fmi3SetBinary", 1, valueReferences, nValueReferences,
+                        (const void *)values);
 }
 
 fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                         size_t nValueReferences, fmi3Clock values[])
 {
-    (void)values;
-    return no_such_type(instance, "fmi3GetClock", 0, valueReferences, nValueReferences);
+    return no_such_type(instance, "fmi3GetClock", 0, valueReferences, nValueReferences,
+                        (const void *)values);
 }
 
 fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                         size_t nValueReferences, const fmi3Clock values[])
 {
-    (void)values;
-    return no_such_type(instance, "fmi3SetClock", 1, valueReferences, nValueReferences);
+    return no_such_type(instance, "fmi3SetClock", 1, valueReferences, nValueReferences,
+                        (const void *)values);
 }
 
 /* ------------------------------------------------ variable dependencies */
 
+/* Not provided: refused with a message, the instance stays usable (nothing of
+ * it is read or changed).  The model description declares no dependencies. */
 fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance,
                                                fmi3ValueReference valueReference,
                                                size_t *nDependencies)
 {
-    (void)valueReference;
-    (void)nDependencies;
-    return unsupported(instance, "fmi3GetNumberOfVariableDependencies");
+    CHECK(instance, "fmi3GetNumberOfVariableDependencies", MASK_ANY);
+    NEED(instance, "fmi3GetNumberOfVariableDependencies", nDependencies);
+    return (fmi3Status)model_refuse(&INST(instance)->m,
+                                    "fmi3GetNumberOfVariableDependencies (value reference %u): "
+                                    "variable dependencies are not provided by this FMU (the "
+                                    "model description declares none); the instance is "
+                                    "unaffected", valueReference);
 }
 
 fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference dependent,
@@ -383,13 +406,17 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference
                                        size_t elementIndicesOfIndependents[],
                                        fmi3DependencyKind dependencyKinds[], size_t nDependencies)
 {
-    (void)dependent;
     (void)elementIndicesOfDependent;
     (void)independents;
     (void)elementIndicesOfIndependents;
     (void)dependencyKinds;
-    (void)nDependencies;
-    return unsupported(instance, "fmi3GetVariableDependencies");
+    CHECK(instance, "fmi3GetVariableDependencies", MASK_ANY);
+    return (fmi3Status)model_refuse(&INST(instance)->m,
+                                    "fmi3GetVariableDependencies (value reference %u, "
+                                    "nDependencies = %lu): variable dependencies are not provided "
+                                    "by this FMU (the model description declares none); the "
+                                    "instance is unaffected", dependent,
+                                    (unsigned long)nDependencies);
 }
 
 /* ------------------------------------------------------------- FMU state */
@@ -399,19 +426,17 @@ fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
     inst3 *s = INST(instance);
     model_data *d;
     CHECK(instance, "fmi3GetFMUState", MASK_FMUSTATE);
-    if (!FMUState) {
-        model_fail(&s->m, "fmi3GetFMUState: null pointer");
-        return fmi3Error;
-    }
+    NEED(instance, "fmi3GetFMUState", FMUState);
     d = (model_data *)*FMUState;
+    if (d && model_state_check(&s->m, "fmi3GetFMUState (state to overwrite)", d,
+                               sizeof(model_data)) != ST_OK)
+        return fmi3Error;
     if (!d) {
         d = (model_data *)malloc(sizeof(model_data));
-        if (!d) {
-            model_fail(&s->m, "fmi3GetFMUState: out of memory");
-            return fmi3Error;
-        }
+        if (!d) return (fmi3Status)model_refuse(&s->m, "fmi3GetFMUState: out of memory");
     }
     memcpy(d, &s->m.d, sizeof(model_data));
+    model_state_seal(d);
     *FMUState = d;
     return fmi3OK;
 }
@@ -419,8 +444,9 @@ fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
 fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState)
 {
     inst3 *s = INST(instance);
-    CHECK(instance, "fmi3SetFMUState", MASK_FMUSTATE);
-    if (model_state_check(&s->m, FMUState, sizeof(model_data)) != ST_OK) return fmi3Error;
+    CHECK(instance, "fmi3SetFMUState", MASK_RESTORE);
+    if (model_state_check(&s->m, "fmi3SetFMUState", FMUState, sizeof(model_data)) != ST_OK)
+        return fmi3Error;
     memcpy(&s->m.d, FMUState, sizeof(model_data));
     return fmi3OK;
 }
@@ -428,7 +454,8 @@ fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState)
 fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
 {
     if (!instance) return fmi3Error;
-    if (!FMUState || !*FMUState) return fmi3OK;
+    NEED(instance, "fmi3FreeFMUState", FMUState);
+    if (!*FMUState) return fmi3OK; /* the standard: a NULL state is ignored */
     free(*FMUState);
     *FMUState = NULL;
     return fmi3OK;
@@ -436,9 +463,9 @@ fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
 
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState FMUState, size_t *size)
 {
-    (void)FMUState;
     CHECK(instance, "fmi3SerializedFMUStateSize", MASK_FMUSTATE);
-    if (!size) return fmi3Error;
+    NEED(instance, "fmi3SerializedFMUStateSize", FMUState);
+    NEED(instance, "fmi3SerializedFMUStateSize", size);
     *size = model_state_size();
     return fmi3OK;
 }
@@ -448,12 +475,13 @@ fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState,
 {
     inst3 *s = INST(instance);
     CHECK(instance, "fmi3SerializeFMUState", MASK_FMUSTATE);
-    if (model_state_check(&s->m, FMUState, sizeof(model_data)) != ST_OK) return fmi3Error;
-    if (!serializedState || size < model_state_size()) {
-        model_fail(&s->m, "fmi3SerializeFMUState: buffer of %lu bytes, %lu needed",
-                   (unsigned long)size, (unsigned long)model_state_size());
+    if (model_state_check(&s->m, "fmi3SerializeFMUState", FMUState, sizeof(model_data)) != ST_OK)
         return fmi3Error;
-    }
+    NEED(instance, "fmi3SerializeFMUState", serializedState);
+    if (size < model_state_size())
+        return (fmi3Status)model_refuse(&s->m, "fmi3SerializeFMUState: buffer of %lu bytes, %lu "
+                                        "needed", (unsigned long)size,
+                                        (unsigned long)model_state_size());
     memcpy(serializedState, FMUState, model_state_size());
     return fmi3OK;
 }
@@ -463,16 +491,18 @@ fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte seriali
 {
     inst3 *s = INST(instance);
     model_data *d;
-    CHECK(instance, "fmi3DeserializeFMUState", MASK_FMUSTATE);
-    if (!FMUState) return fmi3Error;
-    if (model_state_check(&s->m, serializedState, size) != ST_OK) return fmi3Error;
+    CHECK(instance, "fmi3DeserializeFMUState", MASK_RESTORE);
+    NEED(instance, "fmi3DeserializeFMUState", FMUState);
+    NEED(instance, "fmi3DeserializeFMUState", serializedState);
+    if (model_state_check(&s->m, "fmi3DeserializeFMUState", serializedState, size) != ST_OK)
+        return fmi3Error;
     d = (model_data *)*FMUState;
+    if (d && model_state_check(&s->m, "fmi3DeserializeFMUState (state to overwrite)", d,
+                               sizeof(model_data)) != ST_OK)
+        return fmi3Error;
     if (!d) {
         d = (model_data *)malloc(sizeof(model_data));
-        if (!d) {
-            model_fail(&s->m, "fmi3DeserializeFMUState: out of memory");
-            return fmi3Error;
-        }
+        if (!d) return (fmi3Status)model_refuse(&s->m, "fmi3DeserializeFMUState: out of memory");
     }
     memcpy(d, serializedState, sizeof(model_data));
     *FMUState = d;
@@ -697,7 +727,7 @@ fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *nEventIndicators)
 {
     CHECK(instance, "fmi3GetNumberOfEventIndicators", MASK_ANY);
-    if (!nEventIndicators) return fmi3Error;
+    NEED(instance, "fmi3GetNumberOfEventIndicators", nEventIndicators);
     *nEventIndicators = 0;
     return fmi3OK;
 }
@@ -705,7 +735,7 @@ fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *nEventI
 fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *nContinuousStates)
 {
     CHECK(instance, "fmi3GetNumberOfContinuousStates", MASK_ANY);
-    if (!nContinuousStates) return fmi3Error;
+    NEED(instance, "fmi3GetNumberOfContinuousStates", nContinuousStates);
     *nContinuousStates = 0;
     return fmi3OK;
 }
@@ -740,12 +770,15 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     model_status st;
     (void)noSetFMUStatePriorToCurrentPoint;
     CHECK(instance, "fmi3DoStep", MS_STEP);
+    NEED(instance, "fmi3DoStep", eventHandlingNeeded);
+    NEED(instance, "fmi3DoStep", terminateSimulation);
+    NEED(instance, "fmi3DoStep", earlyReturn);
+    NEED(instance, "fmi3DoStep", lastSuccessfulTime);
     st = model_do_step(&s->m, currentCommunicationPoint, communicationStepSize);
-    if (eventHandlingNeeded) *eventHandlingNeeded = fmi3False;
-    if (terminateSimulation) *terminateSimulation = fmi3False;
-    if (earlyReturn) *earlyReturn = fmi3False;
-    if (lastSuccessfulTime)
-        *lastSuccessfulTime = s->m.d.start_time + (double)s->m.d.n * s->m.d.p.Te;
+    *eventHandlingNeeded = fmi3False;
+    *terminateSimulation = fmi3False;
+    *earlyReturn = fmi3False;
+    *lastSuccessfulTime = s->m.d.start_time + (double)s->m.d.n * s->m.d.p.Te;
     return (fmi3Status)st;
 }
 

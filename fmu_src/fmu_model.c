@@ -64,6 +64,21 @@ model_status model_fail(model_instance *m, const char *fmt, ...)
     return ST_ERROR;
 }
 
+model_status model_refuse(model_instance *m, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vlog(m, ST_ERROR, DJL_LOG_LOGSTATUSERROR, fmt, ap);
+    va_end(ap);
+    return ST_ERROR;
+}
+
+model_status model_null_arg(model_instance *m, const char *fn, const char *arg)
+{
+    return model_refuse(m, "%s: argument %s is a null pointer (nothing was read or written)", fn,
+                        arg);
+}
+
 int model_allowed(model_instance *m, const char *fn, int mask)
 {
     if (m->d.state & mask) return 1;
@@ -100,11 +115,16 @@ void model_init(model_instance *m, int fmi_version, const char *instance_name,
 
 void model_reset(model_instance *m) { defaults(&m->d); }
 
-model_status model_set_debug_logging(model_instance *m, int logging_on, size_t n,
+model_status model_set_debug_logging(model_instance *m, const char *fn, int logging_on, size_t n,
                                      const char *const categories[])
 {
     size_t i;
     int c;
+    if (n > 0 && !categories) return model_null_arg(m, fn, "categories");
+    for (i = 0; i < n; i++)
+        if (!categories[i])
+            return model_refuse(m, "%s: categories[%lu] is a null pointer (nothing was changed)",
+                                fn, (unsigned long)i);
     m->logging_on = logging_on;
     if (n == 0) {
         for (c = 0; c < DJL_LOG_N; c++) m->category_on[c] = logging_on;
@@ -114,15 +134,14 @@ model_status model_set_debug_logging(model_instance *m, int logging_on, size_t n
     for (i = 0; i < n; i++) {
         int found = 0;
         for (c = 0; c < DJL_LOG_N; c++) {
-            if (categories[i] && strcmp(categories[i], djl_log_category_names[c]) == 0) {
+            if (strcmp(categories[i], djl_log_category_names[c]) == 0) {
                 m->category_on[c] = logging_on;
                 found = 1;
             }
         }
         if (!found) {
             model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
-                      "SetDebugLogging: unknown log category \"%s\"",
-                      categories[i] ? categories[i] : "(null)");
+                      "%s: unknown log category \"%s\"", fn, categories[i]);
             return ST_WARNING;
         }
     }
@@ -416,18 +435,116 @@ model_status model_terminate(model_instance *m)
 
 size_t model_state_size(void) { return sizeof(model_data); }
 
-model_status model_state_check(model_instance *m, const void *bytes, size_t size)
+/* 64-bit FNV-1a over every byte of the state but the checksum itself (the
+ * padding is included: model_data is zeroed before use and copied whole). */
+uint64_t model_state_checksum(const model_data *d)
 {
-    model_data hdr;
-    if (!bytes) return model_fail(m, "FMU state: null pointer");
+    const unsigned char *b = (const unsigned char *)d;
+    size_t i, skip = offsetof(model_data, checksum);
+    uint64_t h = 0xcbf29ce484222325u;
+    for (i = 0; i < sizeof(model_data); i++) {
+        if (i == skip) {
+            i += sizeof(d->checksum) - 1;
+            continue;
+        }
+        h ^= b[i];
+        h *= 0x100000001b3u;
+    }
+    return h;
+}
+
+void model_state_seal(model_data *d) { d->checksum = model_state_checksum(d); }
+
+static int finite_all(const double *x, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; i++)
+        if (!isfinite(x[i])) return 0;
+    return 1;
+}
+
+static int same_params(const djl_params *a, const djl_params *b)
+{
+    return a->profile == b->profile && a->short_stage == b->short_stage &&
+           memcmp(&a->Te, &b->Te, offsetof(djl_params, T_F) - offsetof(djl_params, Te)) == 0 &&
+           memcmp(a->T_F, b->T_F, sizeof a->T_F) == 0 && a->n_segments == b->n_segments &&
+           memcmp(a->seg_distance, b->seg_distance, sizeof a->seg_distance) == 0 &&
+           memcmp(a->seg_v_end, b->seg_v_end, sizeof a->seg_v_end) == 0;
+}
+
+/* Structure of a state (header already checked): NULL if sound, else why not. */
+static const char *state_flaw(const model_data *d, char *why, size_t nwhy)
+{
+    const djl_plan *pl = &d->plan;
+    int32_t i, cur;
+    djl_sample o;
+    if (d->state != MS_INSTANTIATED && d->state != MS_INIT && d->state != MS_STEP &&
+        d->state != MS_TERMINATED) {
+        snprintf(why, nwhy, "state machine value %ld is not one a state can be saved in",
+                 (long)d->state);
+        return why;
+    }
+    if (d->planned != 0 && d->planned != 1) return "the planned flag is neither 0 nor 1";
+    if (!isfinite(d->start_time)) return "the start time is not finite";
+    if (d->n < 0 || d->n > DJL_MAX_MOTION_SAMPLES) return "the sample counter is out of range";
+    if ((d->state & (MS_STEP | MS_TERMINATED)) && !d->planned)
+        return "a state after initialization without a plan";
+    if (!d->planned) return NULL; /* the plan is rebuilt before any use */
+    if (djl_validate(&d->p, NULL) != DJL_OK) return "its parameters are invalid";
+    if (!same_params(&d->p, &pl->p)) return "its plan was not made from its parameters";
+    if (!isfinite(d->t_start)) return "t_start is not finite";
+    if (!isfinite(d->offset) || fabs(d->offset) > 1e15 || d->offset != floor(d->offset))
+        return "the start offset is not a whole number of samples in range";
+    if (pl->n_segments < 1 || pl->n_segments > DJL_MAX_SEGMENTS)
+        return "the plan's segment count is out of range";
+    if (pl->n_pieces < 1 || pl->n_pieces > DJL_MAX_PIECES)
+        return "the plan's piece count is out of range";
+    if (d->cursor < 0 || d->cursor >= pl->n_pieces) return "the piece cursor is out of range";
+    if (pl->k_end < 0 || pl->k_end > DJL_MAX_MOTION_SAMPLES) return "the motion end is out of range";
+    for (i = 0; i < 4; i++)
+        if (pl->N[i] < 0 || pl->N[i] > DJL_MAX_FILTER_SAMPLES)
+            return "a jerk time in samples is out of range";
+    if (!isfinite(pl->x_target) || !isfinite(pl->v_target) || !isfinite(pl->v_reached) ||
+        !isfinite(pl->a_reached) || !isfinite(pl->d_reached))
+        return "a value of the plan is not finite";
+    for (i = 0; i < pl->n_pieces; i++) {
+        const djl_piece *pc = &pl->piece[i];
+        double v[7];
+        v[0] = pc->x; v[1] = pc->v; v[2] = pc->a; v[3] = pc->j;
+        v[4] = pc->x_al; v[5] = pc->v_al; v[6] = pc->a_al;
+        if (pc->k < 0 || pc->k > DJL_MAX_MOTION_SAMPLES || (i > 0 && pc->k < pl->piece[i - 1].k))
+            return "the plan's pieces are not in order";
+        if (pc->seg < 0 || pc->seg > pl->n_segments) return "a piece's segment is out of range";
+        if (!finite_all(v, 7)) return "a piece of the plan is not finite";
+    }
+    /* the outputs are those of the plan at the current sample */
+    cur = d->cursor;
+    djl_eval(pl, (double)d->n - d->offset, &cur, &o);
+    if (cur != d->cursor || memcmp(&o, &d->out, sizeof o) != 0)
+        return "its outputs are not those of its plan at its time";
+    return NULL;
+}
+
+model_status model_state_check(model_instance *m, const char *fn, const void *bytes, size_t size)
+{
+    model_data d;
+    const char *flaw;
+    char why[128];
+    if (!bytes) return model_null_arg(m, fn, "FMU state");
     if (size != sizeof(model_data))
-        return model_fail(m, "FMU state: %lu bytes, expected %lu (made by another version of "
-                          "the FMU?)", (unsigned long)size, (unsigned long)sizeof(model_data));
-    memcpy(&hdr, bytes, offsetof(model_data, state));
-    if (hdr.magic != MODEL_MAGIC || hdr.layout != MODEL_LAYOUT || hdr.size != sizeof(model_data))
-        return model_fail(m, "FMU state: not a state of this FMU (bad header)");
-    if (strncmp(hdr.token, DJL_INSTANTIATION_TOKEN, sizeof(hdr.token)) != 0)
-        return model_fail(m, "FMU state: made by an FMU with instantiation token %.40s, this one "
-                          "is %s", hdr.token, DJL_INSTANTIATION_TOKEN);
+        return model_refuse(m, "%s: FMU state of %lu bytes, expected %lu (made by another version "
+                            "of the FMU?)", fn, (unsigned long)size,
+                            (unsigned long)sizeof(model_data));
+    memcpy(&d, bytes, sizeof d);
+    if (d.magic != MODEL_MAGIC || d.layout != MODEL_LAYOUT || d.size != sizeof(model_data))
+        return model_refuse(m, "%s: not a state of this FMU (bad header)", fn);
+    if (memchr(d.token, '\0', sizeof d.token) == NULL ||
+        strcmp(d.token, DJL_INSTANTIATION_TOKEN) != 0)
+        return model_refuse(m, "%s: FMU state made by an FMU with another instantiation token "
+                            "(%.40s), this one is %s", fn, d.token, DJL_INSTANTIATION_TOKEN);
+    if (d.checksum != model_state_checksum(&d))
+        return model_refuse(m, "%s: FMU state damaged (checksum mismatch): refused", fn);
+    flaw = state_flaw(&d, why, sizeof why);
+    if (flaw) return model_refuse(m, "%s: FMU state refused: %s", fn, flaw);
     return ST_OK;
 }

@@ -33,14 +33,15 @@ typedef enum {
 typedef enum { ST_OK = 0, ST_WARNING = 1, ST_DISCARD = 2, ST_ERROR = 3, ST_FATAL = 4 } model_status;
 
 #define MODEL_MAGIC 0x4a4c4446u /* "FDLJ" */
-#define MODEL_LAYOUT 1u
+#define MODEL_LAYOUT 2u
 
 typedef struct {
     uint32_t magic;
     uint32_t layout;
     uint32_t size;          /* sizeof(model_data), checked on deserialisation */
-    char token[48];         /* instantiation token of the FMU that made the state */
     int32_t state;          /* model_state */
+    uint64_t checksum;      /* FNV-1a 64 of all the other bytes, set in a saved FMU state */
+    char token[48];         /* instantiation token of the FMU that made the state */
     djl_params p;
     double t_start;         /* s */
     double start_time;      /* s, FMU start time */
@@ -88,7 +89,19 @@ model_status model_fail(model_instance *m, const char *fmt, ...)
 #endif
     ;
 
-model_status model_set_debug_logging(model_instance *m, int logging_on, size_t n,
+/* An error that leaves the instance as it was (a bad argument detected before
+ * anything was read or written): logged, the state does not change. */
+model_status model_refuse(model_instance *m, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+/* A NULL pointer argument: refused with a message naming fn and arg. */
+model_status model_null_arg(model_instance *m, const char *fn, const char *arg);
+
+/* Categories are checked (NULL array, NULL entry) before anything changes. */
+model_status model_set_debug_logging(model_instance *m, const char *fn, int logging_on, size_t n,
                                      const char *const categories[]);
 
 /* Variable access.  vr is an element value reference (FMI 2 style: arrays at
@@ -113,9 +126,15 @@ model_status model_exit_init(model_instance *m);
 model_status model_do_step(model_instance *m, double t, double h);
 model_status model_terminate(model_instance *m);
 
-/* FMU state: bytes of model_data. */
+/* FMU state: bytes of model_data, sealed with a checksum (model_state_seal)
+ * when saved.  model_state_check verifies size, header, checksum and then
+ * the structure of everything a restore would bring back (state value,
+ * counts, indices, ordering, finiteness, outputs consistent with the plan);
+ * a refusal is logged (naming fn) and leaves the instance as it was. */
 size_t model_state_size(void);
-model_status model_state_check(model_instance *m, const void *bytes, size_t size);
+uint64_t model_state_checksum(const model_data *d);
+void model_state_seal(model_data *d);
+model_status model_state_check(model_instance *m, const char *fn, const void *bytes, size_t size);
 
 #if defined(__GNUC__) && __GNUC__ >= 4
 #pragma GCC visibility pop

@@ -27,6 +27,7 @@ __all__ = [
     "REQUIRED_VARIABLES",
     "AxisFMU",
     "MoveSamples",
+    "check_fmu_binary",
     "check_fmu_variables",
     "stage_starts",
     "sync_z_velocity",
@@ -63,16 +64,76 @@ def check_fmu_variables(path: str | Path) -> list[str]:
     Raises
     ------
     ValueError
-        If the file cannot be read as an FMU.
+        If the file cannot be read as an FMU, or would unpack to more than
+        :data:`harness.fmu.runner.MAX_FMU_UNPACKED` bytes.
     """
     from fmpy import read_model_description
 
+    from .fmu.runner import check_fmu_archive
+
+    check_fmu_archive(path)
     try:
         md = read_model_description(str(path))
     except Exception as e:  # noqa: BLE001 - any failure means "not an FMU"
         raise ValueError(f"cannot read {path} as an FMU: {e}") from None
     names = {v.name for v in md.modelVariables}
     return [n for n in REQUIRED_VARIABLES if n not in names]
+
+
+def check_fmu_binary(path: str | Path) -> None:
+    """Check that an FMU file has a co-simulation binary for this platform that loads.
+
+    Only the library is unpacked (into a temporary folder, removed), then
+    loaded and unloaded.
+
+    Raises
+    ------
+    ValueError
+        Naming the file: no co-simulation interface, no binary for this
+        platform, or a binary that cannot be loaded (corrupt, wrong architecture).
+    """
+    import ctypes
+    import shutil
+    import tempfile
+    import zipfile
+
+    import fmpy
+    from fmpy import read_model_description
+
+    from .fmu.runner import check_fmu_archive
+
+    path = Path(path)
+    check_fmu_archive(path)
+    try:
+        md = read_model_description(str(path))
+    except Exception as e:  # noqa: BLE001
+        raise ValueError(f"cannot read {path} as an FMU: {e}") from None
+    cs = md.coSimulation
+    if cs is None:
+        raise ValueError(f"{path}: not a co-simulation FMU")
+    plat = fmpy.platform_tuple if md.fmiVersion.startswith("3") else fmpy.platform
+    member = f"binaries/{plat}/{cs.modelIdentifier}{fmpy.sharedLibraryExtension}"
+    tmp = tempfile.mkdtemp(prefix="djl-fmu-check-")
+    try:
+        try:
+            with zipfile.ZipFile(path) as z:
+                if member not in z.namelist():
+                    raise ValueError(f"{path}: the FMU has no binary for this platform "
+                                     f"({member}); rebuild it here (e.g. fmpy compile)")
+                lib = Path(z.extract(member, tmp))
+        except (zipfile.BadZipFile, OSError, RuntimeError) as e:
+            raise ValueError(f"{path}: cannot unpack {member}: {e}") from None
+        try:
+            handle = ctypes.CDLL(str(lib))
+        except OSError as e:
+            raise ValueError(f"{path}: the FMU's binary {member} cannot be loaded: "
+                             f"{str(e).replace(str(lib) + ': ', '')}") from None
+        try:
+            fmpy.freeLibrary(ctypes.c_void_p(handle._handle))
+        except Exception:  # noqa: BLE001
+            pass
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
 
 
 @dataclass

@@ -119,6 +119,25 @@ __all__ = [
 PROFILES = ("AL", "JL", "DJL")
 _MISSING = object()
 
+# ------------------------------------------------ limits (docs/harness.md, "Limits")
+MAX_SAMPLES_PER_RUN = 10**7
+"""Most generator samples (``Te``) one simulated move may take: the motion (bounded
+from above before running) plus ``t_after``, divided by ``Te``."""
+MAX_SWEEP_CASES = 10**5
+"""Most cases of a ``[sweep]`` (the product of its list lengths)."""
+MAX_MAP_MOVES = 10**6
+"""Most moves of a ``[map]`` grid (the product of its list lengths)."""
+MAX_LIST_LENGTH = 10**5
+"""Longest list of numbers in a scenario (``[sweep]``, ``[map]``, ``f``/``z`` tables)."""
+MAX_GAIN = 1e6
+"""Largest magnitude of a mode's ``gain``."""
+FREQUENCY_RANGE = (1e-3, 1e5)
+"""Frequencies of the mode laws (``f``, ``f_ref``), in Hz."""
+MASS_RATIO_RANGE = (1e-6, 1e6)
+"""Range of a mode's ``mass_ratio``."""
+MAX_STEP = 1.0
+"""Largest ``Te`` and communication ``step`` (s)."""
+
 
 class ScenarioError(ValueError):
     """A scenario that cannot be run: names the file, the key and the value.
@@ -142,7 +161,7 @@ class ScenarioError(ValueError):
         elif value is _MISSING or value is None:
             msg = f"{source}: {key} is missing: {problem}"
         else:
-            msg = f"{source}: {key} = {value!r}: {problem}"
+            msg = f"{source}: {key} = {_show(value)!r}: {problem}"
         super().__init__(msg)
 
 
@@ -395,6 +414,16 @@ class Scenario:
 # --------------------------------------------------------------- parsing
 
 
+def _finite(x: Any) -> bool:
+    """Return True for an int or float (not bool) that is a finite float (no 400-digit int)."""
+    if isinstance(x, bool) or not isinstance(x, (int, float)):
+        return False
+    try:
+        return math.isfinite(float(x))
+    except OverflowError:
+        return False
+
+
 class _Table:
     """Reads one TOML table, remembering which keys were used."""
 
@@ -424,8 +453,8 @@ class _Table:
         v = self.raw(k, default, what)
         if k not in self.data:
             return v
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-            raise self.err(k, v, "must be a finite number" + (f" ({what})" if what else ""))
+        if not _finite(v):
+            raise self.err(k, _show(v), "must be a finite number" + (f" ({what})" if what else ""))
         v = float(v)
         if positive and not v > 0:
             raise self.err(k, v, "must be > 0" + (f" ({what})" if what else ""))
@@ -440,10 +469,11 @@ class _Table:
         v = self.raw(k, default, what)
         if k not in self.data:
             return v
-        if not isinstance(v, list) or len(v) < min_len or any(
-                isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x)
-                for x in v):
-            raise self.err(k, v, f"must be a list of at least {min_len} finite number(s)"
+        if isinstance(v, list) and len(v) > MAX_LIST_LENGTH:
+            raise self.err(k, _show(v), f"has {len(v)} values, more than the limit of "
+                           f"{MAX_LIST_LENGTH} (MAX_LIST_LENGTH)")
+        if not isinstance(v, list) or len(v) < min_len or any(not _finite(x) for x in v):
+            raise self.err(k, _show(v), f"must be a list of at least {min_len} finite number(s)"
                            + (f" ({what})" if what else ""))
         return tuple(float(x) for x in v)
 
@@ -472,7 +502,7 @@ class _Table:
         if k not in self.data:
             return v
         if isinstance(v, bool) or not isinstance(v, int):
-            raise self.err(k, v, "must be an integer")
+            raise self.err(k, _show(v), "must be an integer")
         if choices is not None and v not in choices:
             raise self.err(k, v, f"must be one of {', '.join(map(str, choices))}")
         return v
@@ -484,8 +514,26 @@ class _Table:
             raise self.err(k, self.data[k], f"unknown key (known: {', '.join(sorted(self.used))})")
 
 
+def _show(v: Any, limit: int = 60) -> Any:
+    """Return the value for an error message, huge integers and long lists shortened."""
+    if isinstance(v, list):
+        items = [_show(x, limit) for x in v[:8]]
+        return items + (["..."] if len(v) > 8 else [])
+    if isinstance(v, int) and not isinstance(v, bool) and abs(v) > 10**18:
+        n = int(abs(v).bit_length() * 0.30103) + 1  # about its number of digits
+        return _Shown(f"{'-' if v < 0 else ''}<an integer of about {n} digits>")
+    if isinstance(v, str) and len(v) > 10 * limit:
+        return v[:10 * limit] + "..."
+    return v
+
+
+class _Shown(str):
+    def __repr__(self) -> str:
+        return str(self)
+
+
 def _check_fmu(source: str, key: str, path: Path) -> None:
-    from .planner import check_fmu_variables
+    from .planner import check_fmu_binary, check_fmu_variables
 
     if not path.is_file():
         raise ScenarioError(source, key, str(path), "no such FMU file")
@@ -496,6 +544,19 @@ def _check_fmu(source: str, key: str, path: Path) -> None:
     if missing:
         raise ScenarioError(source, key, str(path),
                             "the FMU lacks the generator variables " + ", ".join(missing))
+    try:
+        check_fmu_binary(path)
+    except ValueError as e:
+        raise ScenarioError(source, key, str(path), str(e)) from None
+
+
+def _check_frequencies(t: _Table, k: str, values: Any) -> None:
+    lo, hi = FREQUENCY_RANGE
+    bad = [x for x in values if not lo <= x <= hi]
+    if bad:
+        v = list(values) if len(values) > 1 else values[0]
+        raise t.err(k, _show(v), f"frequencies must be in [{lo:g}, {hi:g}] Hz "
+                    f"(FREQUENCY_RANGE; got {bad[0]:g})")
 
 
 def _parse_mode(source: str, i: int, data: Any) -> ModeSpec:
@@ -510,6 +571,7 @@ def _parse_mode(source: str, i: int, data: Any) -> ModeSpec:
         f = t.number("f", what="frequency in Hz")
         if not f > 0:
             raise t.err("f", f, "frequency must be > 0 Hz")
+        _check_frequencies(t, "f", [f])
         law = ConstantLaw(f)
     elif law_name in ("linear", "table"):
         z = t.numbers("z", what="positions in m", min_len=2)
@@ -517,6 +579,7 @@ def _parse_mode(source: str, i: int, data: Any) -> ModeSpec:
         bad = [x for x in f if not x > 0]
         if bad:
             raise t.err("f", list(f), f"frequencies must be > 0 Hz (got {bad[0]:g})")
+        _check_frequencies(t, "f", f)
         if len(z) != len(f):
             raise t.err("f", list(f), f"needs as many values as z ({len(z)})")
         if law_name == "linear":
@@ -533,13 +596,19 @@ def _parse_mode(source: str, i: int, data: Any) -> ModeSpec:
         f_ref = t.number("f_ref", what="frequency in Hz at z_ref")
         if not f_ref > 0:
             raise t.err("f_ref", f_ref, "frequency must be > 0 Hz")
+        _check_frequencies(t, "f_ref", [f_ref])
         L_ref = t.number("L_ref", positive=True, what="overhanging length in m at z_ref")
         z_ref = t.number("z_ref", 0.0)
         direction = t.integer("direction", 1, choices=(1, -1))
         law = CantileverLaw(f_ref, L_ref, z_ref, direction)
     gain = t.number("gain", 1.0, nonzero=True)
+    if abs(gain) > MAX_GAIN:
+        raise t.err("gain", gain, f"magnitude must be <= {MAX_GAIN:g} (MAX_GAIN)")
     mass_ratio = t.number("mass_ratio", 1.0, positive=True,
                           what="load mass / mass of the modal survey")
+    if not MASS_RATIO_RANGE[0] <= mass_ratio <= MASS_RATIO_RANGE[1]:
+        raise t.err("mass_ratio", mass_ratio, f"must be in [{MASS_RATIO_RANGE[0]:g}, "
+                    f"{MASS_RATIO_RANGE[1]:g}] (MASS_RATIO_RANGE)")
     t.finish()
     return ModeSpec(law, zeta, gain, mass_ratio, name)
 
@@ -574,6 +643,9 @@ def parse_scenario(data: Mapping[str, Any], source: str = "<string>",
     s = _Table(source, "simulation", top.raw("simulation", {}))
     Te = s.number("Te", 1e-3, positive=True, what="generator sampling period in s")
     step = s.number("step", Te, positive=True, what="communication step in s")
+    for k_, v_ in (("Te", Te), ("step", step)):
+        if v_ > MAX_STEP:
+            raise s.err(k_, v_, f"must be <= {MAX_STEP:g} s (MAX_STEP)")
     ratio = step / Te
     if abs(ratio - round(ratio)) > 1e-9 * max(1.0, ratio) or round(ratio) < 1:
         raise s.err("step", step, f"must be a whole multiple of Te = {Te:g} s")
@@ -723,6 +795,7 @@ def parse_scenario(data: Mapping[str, Any], source: str = "<string>",
 
     scen = Scenario(name, move, z, ModeMap(modes, tune_mode - 1), sim, compare, sweep,
                     description, source, wmap)
+    _check_grids(scen)
     # the mode laws must be valid wherever Z goes, in every case
     for case in scen.cases():
         _check_z_range(source, modes, case.z.z0, case.z.distance)
@@ -731,7 +804,91 @@ def parse_scenario(data: Mapping[str, Any], source: str = "<string>",
         z0s, dzs, _, _ = scen.map_axes()
         for z0_, dz_ in itertools.product(z0s, dzs):
             _check_z_range(source, modes, z0_, dz_, " in the [map] grid")
+    _check_samples(scen)
     return scen
+
+
+def _check_grids(scen: Scenario) -> None:
+    """Refuse a ``[sweep]`` or ``[map]`` grid larger than the documented limits."""
+    src = scen.source
+    if scen.sweep is not None:
+        sw = scen.sweep
+        n = math.prod(len(x) for x in (sw.distance, sw.z_distance, sw.v_max) if x)
+        if n > MAX_SWEEP_CASES:
+            sizes = " x ".join(f"{len(x)} {k}" for k, x in (
+                ("distance", sw.distance), ("z_distance", sw.z_distance), ("v_max", sw.v_max))
+                if x)
+            raise ScenarioError(src, "sweep", _Shown(sizes), f"{n} cases, more than the limit "
+                                f"of {MAX_SWEEP_CASES} (MAX_SWEEP_CASES)")
+    if scen.map is not None and scen.map_size > MAX_MAP_MOVES:
+        raise ScenarioError(src, "map", _Shown(" x ".join(str(len(a)) for a in scen.map_axes())),
+                            f"{scen.map_size} moves, more than the limit of {MAX_MAP_MOVES} "
+                            f"(MAX_MAP_MOVES)")
+
+
+def _check_samples(scen: Scenario) -> None:
+    """Refuse, before running, a run longer than :data:`MAX_SAMPLES_PER_RUN` samples.
+
+    The samples of a run are bounded from above cheaply: motion time <= t_start
+    + |d|/v + v/a + v/d + four jerk times (imposed, or (1 + period_band) modal
+    periods), the Z move likewise, plus ``t_after``, divided by ``Te`` -- with
+    the worst values of the sweep/map lists.
+    """
+    src, sim, mv, zz, cmp = scen.source, scen.simulation, scen.move, scen.z, scen.compare
+    # the worst values over the single move, the sweep and the map
+    where = "move"
+    ds, vs, z0s, dzs = [mv.distance], [mv.v_max], [zz.z0], [zz.distance]
+    for tab, spec in (("sweep", scen.sweep), ("map", scen.map)):
+        if spec is None:
+            continue
+        if spec.distance:
+            ds += spec.distance
+        if spec.v_max:
+            vs += spec.v_max
+            where = tab
+        if spec.z_distance:
+            dzs += spec.z_distance
+        if getattr(spec, "z0", None):
+            z0s += spec.z0
+    d, v_lo, v_hi = max(abs(x) for x in ds), min(vs), max(vs)
+    # jerk times: imposed, or tuned to the modal periods over the Z positions reached
+    if cmp.DJL_T_F is not None or cmp.JL_T_F is not None:
+        jerk = max(sum(cmp.DJL_T_F or ()), 4 * (cmp.JL_T_F or 0.0))
+    else:
+        import numpy as np
+
+        zs = np.unique(np.add.outer(np.asarray(z0s), np.asarray([0.0, *dzs])))
+        try:
+            f_lo = float(np.min(scen.modemap.tuned.f_array(zs)))
+        except Exception:  # noqa: BLE001 - a law outside its range: checked elsewhere
+            f_lo = FREQUENCY_RANGE[0]
+        jerk = 4 * (1.0 + cmp.period_band) / max(f_lo, 1e-300)
+    t_x = mv.t_start + d / v_lo + v_hi / mv.a_max + v_hi / mv.d_max + jerk
+    dz = max(abs(x) for x in dzs)
+    t_z = (dz / zz.v_max + 2 * zz.v_max / zz.a_max + 2 * zz.T_F) if dz else 0.0
+    motion = max(t_x, t_z)
+    total = motion + sim.t_after + sim.step
+    n = total / sim.Te
+    if n <= MAX_SAMPLES_PER_RUN:
+        return
+    limit = f"more than the limit of {MAX_SAMPLES_PER_RUN:.0e} samples per run " \
+            f"(MAX_SAMPLES_PER_RUN)"
+    about = f"a run would simulate up to {total:.3g} s at Te = {sim.Te:g} s, {n:.3g} samples: "
+    if total / 1e-3 <= MAX_SAMPLES_PER_RUN:
+        raise ScenarioError(src, "simulation.Te", sim.Te, about + limit)
+    if sim.t_after >= motion:
+        raise ScenarioError(src, "simulation.t_after", sim.t_after, about + limit)
+    if t_z > t_x:
+        raise ScenarioError(src, "z.v_max", zz.v_max, f"a Z move of up to {t_z:.3g} s: "
+                            + about + limit)
+    if jerk > d / v_lo:
+        key = "compare.DJL_T_F" if cmp.DJL_T_F else "compare.JL_T_F" if cmp.JL_T_F else \
+            f"mode[{scen.modemap.tune + 1}].f"
+        raise ScenarioError(src, key, _Shown(f"jerk times up to {jerk:.3g} s"),
+                            about + limit)
+    key, val = (f"{where}.v_max", v_lo) if where != "move" else ("move.v_max", mv.v_max)
+    raise ScenarioError(src, key, val, f"a motion of up to {t_x:.3g} s (distance "
+                        f"{d:g} m at {v_lo:g} m/s): " + about + limit)
 
 
 def _check_z_range(source: str, modes: tuple[ModeSpec, ...], z0: float, dz: float,
@@ -802,9 +959,13 @@ def load_scenario(spec: str | Path) -> Scenario:
             text = path.read_text(encoding="utf-8")
         except OSError as e:
             raise ScenarioError(str(path), "", None, f"cannot read: {e}") from None
+        except UnicodeDecodeError as e:
+            raise ScenarioError(str(path), "", None, f"not UTF-8 text (byte {e.start}): a "
+                                "scenario file must be UTF-8 TOML") from None
         try:
             data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as e:
+        except (tomllib.TOMLDecodeError, ValueError) as e:
+            # ValueError: e.g. an integer beyond Python's int-string conversion limit
             raise ScenarioError(str(path), "", None, f"not valid TOML: {e}") from None
         return parse_scenario(data, str(path), path.parent)
     for entry in resources.files(_PACKAGE).iterdir():

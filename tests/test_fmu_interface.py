@@ -363,3 +363,109 @@ def test_no_drift_over_a_long_motion(fmu2):
         g.do_step(1002.0)  # one step over 10,020,000 samples
         assert g.get("x") == pytest.approx(1005.0, rel=1e-15, abs=1e-12)
         assert g.get("done")
+
+
+# ------------------------------------------- null pointers (issue #10, item 4)
+
+def _raw(g: GeneratorFMU):
+    """The instance handle and the low-level FMI function prefix of fmpy."""
+    return g.fmu.component, ("fmi2" if g.fmi_version == 2 else "fmi3")
+
+
+def test_null_value_arrays_are_errors_with_a_message_and_harmless(fmu):
+    import ctypes
+
+    with GeneratorFMU(fmu) as g:
+        h, pre = _raw(g)
+        vr = (ctypes.c_uint * 1)(g.variable("v_max").valueReference)
+        setter = getattr(g.fmu, pre + ("SetReal" if pre == "fmi2" else "SetFloat64"))
+        args = (h, vr, 1, None) if pre == "fmi2" else (h, vr, 1, None, 1)
+        with pytest.raises(FMUError) as info:
+            g._call(setter, *args)
+        assert info.value.status == 3
+        assert "SetReal: argument value is a null pointer" in str(info.value) or \
+            "SetFloat64: argument values is a null pointer" in str(info.value)
+        cats = (ctypes.c_char_p * 2)(b"logEvents", None)
+        with pytest.raises(FMUError) as info:
+            g._call(getattr(g.fmu, pre + "SetDebugLogging"), h, 1, 2, cats)
+        assert "categories[1] is a null pointer" in str(info.value)
+        with pytest.raises(FMUError) as info:
+            g._call(getattr(g.fmu, pre + "SetDebugLogging"), h, 1, 3, None)
+        assert "SetDebugLogging: argument categories" in str(info.value)
+        # the instance is unaffected: it initializes and runs
+        g.set({"distance": 0.2})
+        g.initialize()
+        vx = (ctypes.c_uint * 1)(g.variable("x").valueReference)
+        getter = getattr(g.fmu, pre + ("GetReal" if pre == "fmi2" else "GetFloat64"))
+        args = (h, vx, 1, None) if pre == "fmi2" else (h, vx, 1, None, 1)
+        with pytest.raises(FMUError) as info:
+            g._call(getter, *args)
+        assert "argument value" in str(info.value)
+        g.do_step(1.0)
+        assert g.get("x") == pytest.approx(0.2, rel=1e-12)
+    _healthy_afterwards(fmu)
+
+
+def test_null_state_pointers_are_errors_with_a_message(fmu):
+    with GeneratorFMU(fmu) as g:
+        h, pre = _raw(g)
+        g.initialize()
+        names = ({"get": "GetFMUstate", "size": "SerializedFMUstateSize"} if pre == "fmi2"
+                 else {"get": "GetFMUState", "size": "SerializedFMUStateSize"})
+        with pytest.raises(FMUError) as info:
+            g._call(getattr(g.fmu, pre + names["get"]), h, None)
+        arg = "FMUstate" if pre == "fmi2" else "FMUState"
+        assert f"{pre}{names['get']}: argument {arg} is a null pointer" in str(info.value)
+        state = g.get_state()
+        with pytest.raises(FMUError) as info:
+            g._call(getattr(g.fmu, pre + names["size"]), h, state, None)
+        assert "argument size is a null pointer" in str(info.value)
+        g.free_state(state)
+        g.do_step(1e-3)
+        assert math.isfinite(g.get("x"))
+
+
+# -------------------------- variable dependencies (issue #10, item 7)
+
+def test_fmi3_variable_dependencies_refused_but_instance_usable(fmu3):
+    import ctypes
+
+    with GeneratorFMU(fmu3) as g:
+        g.initialize()
+        n = ctypes.c_size_t(7)
+        vr = g.variable("x").valueReference
+        with pytest.raises(FMUError) as info:
+            g._call(g.fmu.fmi3GetNumberOfVariableDependencies, g.fmu.component, vr,
+                    ctypes.byref(n))
+        assert "fmi3GetNumberOfVariableDependencies" in str(info.value)
+        assert "not provided" in str(info.value)
+        assert any(r.status == 3 and r.category == "logStatusError" for r in g.log)
+        for _ in range(10):
+            g.do_step(1e-3)
+        assert math.isfinite(g.get("x"))
+
+
+# --------------------------------- corrupted FMU states (issue #10, item 3)
+
+def test_damaged_body_of_a_serialized_state_is_refused(fmu):
+    rng = np.random.default_rng(10)
+    with GeneratorFMU(fmu) as g:
+        g.initialize()
+        _record(g, 100, 1e-3)
+        t_saved = g.time
+        state = g.get_state()
+        data = bytes(g.serialize_state(state))
+        g.free_state(state)
+        reference = _record(g, 50, 1e-3)
+        for _ in range(200):
+            blob = bytearray(data)
+            pos = int(rng.integers(64, len(blob)))  # past the header
+            blob[pos] ^= int(rng.integers(1, 256))
+            with pytest.raises(FMUError) as info:
+                g._call(g.deserialize_state, bytes(blob))
+            assert "checksum" in str(info.value) or "refused" in str(info.value)
+        # refusals left the instance as it was: the good state still replays identically
+        g.set_state(g.deserialize_state(data), t_saved)
+        assert np.array_equal(_record(g, 50, 1e-3), reference)
+        g.fmu.reset()
+    _healthy_afterwards(fmu)

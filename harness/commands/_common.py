@@ -33,7 +33,7 @@ def load_scenarios(names: Sequence[str], fmu: Path | None, fmi_version: int | No
     ------
     CommandError
         With status 2, on a bad scenario, two scenarios of the same name, or an
-        output path that is not a folder.
+        output path that is not a folder or cannot be written.
     """
     from ..scenario import ScenarioError, load_scenario
 
@@ -44,9 +44,102 @@ def load_scenarios(names: Sequence[str], fmu: Path | None, fmi_version: int | No
     except ScenarioError as e:
         raise CommandError(2, str(e)) from None
     check_stems(scenarios)
-    if out.exists() and not out.is_dir():
-        raise CommandError(2, f"--out {out} exists and is not a directory")
+    check_out_dir(out)
     return scenarios, [safe_stem(s.name) for s in scenarios]
+
+
+def _nearest_existing(path: Path) -> Path:
+    base = path
+    while not base.exists() and base.parent != base:
+        base = base.parent
+    return base
+
+
+def _writable_dir(d: Path) -> bool:
+    """Return True if a file can be created in the existing folder ``d`` (tried, removed)."""
+    import os
+    import tempfile
+
+    if not os.access(d, os.W_OK | os.X_OK):
+        return False
+    try:
+        fd, name = tempfile.mkstemp(dir=d, prefix=".djl-fmu-probe-")
+    except OSError:
+        return False
+    os.close(fd)
+    Path(name).unlink(missing_ok=True)
+    return True
+
+
+def check_out_dir(out: Path, option: str = "--out") -> None:
+    """Refuse an output folder that cannot be created or written, before anything runs.
+
+    Raises
+    ------
+    CommandError
+        Status 2: ``out`` is a file, the nearest existing folder above it is a
+        file, or it is not writable.
+    """
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise CommandError(2, f"{option} {out} exists and is not a directory")
+    base = _nearest_existing(out)
+    if not base.is_dir():
+        raise CommandError(2, f"{option} {out}: {base} is a file, not a directory")
+    if not _writable_dir(base):
+        raise CommandError(2, f"{option} {out}: {base} is not writable")
+
+
+def check_out_file(path: Path, option: str = "-o") -> None:
+    """Refuse an output file that cannot be written, before anything runs.
+
+    Raises
+    ------
+    CommandError
+        Status 2: ``path`` is an existing folder (or not a regular file), a
+        folder above it is a file, or the folder it goes in is not writable.
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise CommandError(2, f"{option} {path} is an existing directory, not a file")
+    if path.exists() and not path.is_file():
+        raise CommandError(2, f"{option} {path} exists and is not a regular file")
+    import os
+
+    if path.exists() and not os.access(path, os.W_OK):
+        raise CommandError(2, f"{option} {path}: the file is not writable")
+    base = _nearest_existing(path.parent)
+    if not base.is_dir():
+        raise CommandError(2, f"{option} {path}: {base} is a file, not a directory")
+    if not _writable_dir(base):
+        raise CommandError(2, f"{option} {path}: {base} is not writable")
+
+
+FINITE_METRICS = ("residual_m", "free_amplitude_m", "motion_time_s")
+"""Result columns that must be finite numbers: a NaN there is a failure (exit 1)."""
+
+
+def check_finite(name: str, result: Any) -> None:
+    """Refuse a result with a NaN in :data:`FINITE_METRICS` or an infinite number anywhere.
+
+    (A NaN settling or rise time is a documented outcome: "not within the window".)
+
+    Raises
+    ------
+    CommandError
+        Status 1, naming the scenario, the profile and the column.
+    """
+    import math
+
+    rows = result.rows() if hasattr(result, "rows") else []
+    for row in rows:
+        for k, v in row.items():
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                continue
+            if math.isinf(v) or (k in FINITE_METRICS and math.isnan(v)):
+                where = ", ".join(str(row[c]) for c in ("scenario", "profile") if c in row)
+                raise CommandError(1, f"simulation failed ({name}): {k} = {v} for {where or name}"
+                                      f": a non-finite result (nothing written)")
 
 
 def check_stems(scenarios: Sequence[Any]) -> None:

@@ -31,15 +31,29 @@ def run(args: argparse.Namespace) -> int:
     """Run the demo; non-zero exit if a check fails."""
     from fmpy.validation import validate_fmu
 
-    from ..fmu.build import build_fmu
+    from ..fmu.build import BuildError, build_fmu, check_compiler
     from ..fmu.runner import generate
 
     out: Path = args.out
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        check_compiler()  # before writing anything
+    except BuildError as e:
+        print(f"djl-fmu demo: {e}", file=sys.stderr)
+        return 1
+    if out.exists() and not out.is_dir():
+        print(f"djl-fmu demo: --out {out} exists and is not a directory", file=sys.stderr)
+        return 2
     ok = True
     fmus = {}
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        for v in (2, 3):
+            fmus[v] = build_fmu(v, out / f"JerkLimitedTrajectory-fmi{v}.fmu")
+    except (BuildError, OSError) as e:
+        print(f"djl-fmu demo: cannot build the FMUs in {out}: {e}", file=sys.stderr)
+        return 1
     for v in (2, 3):
-        path = build_fmu(v, out / f"JerkLimitedTrajectory-fmi{v}.fmu")
+        path = fmus[v]
         problems = validate_fmu(str(path))
         fmus[v] = path
         status = "valid" if not problems else "INVALID: " + "; ".join(problems)

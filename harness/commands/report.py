@@ -67,7 +67,17 @@ def run(args: argparse.Namespace) -> int:
     """Run the claims, write the report, print one line per claim."""
     from ..claims import CATALOGUE
     from ..report import print_failures, write_report
+    from ._common import CommandError, check_out_file
 
+    try:
+        check_out_file(args.output, "-o")
+        if args.figures_beside:
+            from ._common import check_out_dir
+
+            check_out_dir(args.output.with_name(args.output.stem + "_files"), "-o")
+    except CommandError as e:
+        print(f"djl-fmu report: {e}", file=sys.stderr)
+        return e.status
     numbers = set(CATALOGUE)
     if args.claims is not None:
         unknown = sorted(set(args.claims) - numbers)
@@ -90,6 +100,22 @@ def run(args: argparse.Namespace) -> int:
             print(f"djl-fmu report: --fmu {args.fmu}: the FMU lacks the generator variables "
                   + ", ".join(missing), file=sys.stderr)
             return 2
+        from ..planner import check_fmu_binary
+
+        try:
+            check_fmu_binary(args.fmu)
+        except ValueError as e:
+            print(f"djl-fmu report: --fmu {e}", file=sys.stderr)
+            return 2
+    if args.fmu is None:
+        # the package's FMU is built (or found in the cache) now, not inside a claim
+        from ..fmu.build import BuildError, default_fmu
+
+        try:
+            default_fmu(args.fmi_version)
+        except (BuildError, OSError) as e:
+            print(f"djl-fmu report: cannot build the FMU: {e}", file=sys.stderr)
+            return 1
     command = " ".join(
         ["djl-fmu report", "-o", str(args.output)]
         + (["--fast"] if args.fast else [])

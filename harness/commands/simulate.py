@@ -108,6 +108,7 @@ def _run(args: argparse.Namespace) -> int:
     from ._common import (
         CommandError,
         apply_tuning,
+        check_finite,
         load_scenarios,
         parse_tuning,
         report_written,
@@ -153,6 +154,7 @@ def _run(args: argparse.Namespace) -> int:
         for sc, (ok, value) in zip(scenarios, outcomes, strict=True):
             if not ok:
                 raise CommandError(1, f"simulation failed ({sc.name}): {value}")
+            check_finite(sc.name, value[0])
             results.append(value[0])
             figures += value[1]
 

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import sys
 from pathlib import Path
 
@@ -122,19 +121,9 @@ def check_out(out: Path) -> None:
         Status 2: ``out`` (or the nearest existing folder above it) is a file,
         or is not writable.
     """
-    from ._common import CommandError
+    from ._common import check_out_dir
 
-    if out.exists() and not out.is_dir():
-        raise CommandError(2, f"--out {out} exists and is not a directory")
-    base = out
-    while not base.exists():
-        if base.parent == base:
-            break
-        base = base.parent
-    if base.exists() and not base.is_dir():
-        raise CommandError(2, f"--out {out}: {base} is a file, not a directory")
-    if base.exists() and not os.access(base, os.W_OK | os.X_OK):
-        raise CommandError(2, f"--out {out}: {base} is not writable")
+    check_out_dir(out)
 
 
 def _run(args: argparse.Namespace) -> int:

@@ -67,16 +67,36 @@ def model_description(fmi_version: int) -> Path:
     return modeldesc_dir() / f"fmi{fmi_version}" / "modelDescription.xml"
 
 
+def check_compiler(cc: str = "gcc") -> str:
+    """Full path of the C compiler ``cc``.
+
+    Raises
+    ------
+    BuildError
+        If it is not on ``PATH``: the message says gcc is needed to build the FMU.
+    """
+    found = shutil.which(cc)
+    if found is None:
+        raise BuildError(f"the C compiler {cc!r} is needed to build the generator FMU and was "
+                         f"not found on PATH: install gcc (e.g. apt-get install gcc), or give "
+                         f"an FMU file built elsewhere (--fmu / simulation.fmu)")
+    return found
+
+
 def compile_binary(fmi_version: int, out: Path, *, cc: str = "gcc",
                    extra_cflags: tuple[str, ...] = ()) -> Path:
     """Compile the shared library of the FMU into ``out``."""
     files = [f for f in source_files(fmi_version) if f.suffix == ".c"]
     cmd = [cc, *CFLAGS, *extra_cflags, f"-I{fmi_include_dir()}", f"-I{fmu_src_dir()}",
            *map(str, files), "-o", str(out), *LDFLAGS]
+    check_compiler(cc)
     try:
         proc = subprocess.run(cmd, capture_output=True, text=True)
     except FileNotFoundError as e:
-        raise BuildError(f"C compiler {cc!r} not found: install gcc") from e
+        raise BuildError(f"the C compiler {cc!r} is needed to build the generator FMU and was "
+                         f"not found: install gcc") from e
+    except OSError as e:
+        raise BuildError(f"cannot run the C compiler {cc!r}: {e}") from e
     if proc.returncode != 0:
         raise BuildError(f"compilation failed ({' '.join(cmd)}):\n{proc.stderr}")
     return out
@@ -103,6 +123,7 @@ def build_fmu(fmi_version: int, out_path: str | os.PathLike, *, cc: str = "gcc",
         ``out_path``.
     """
     _check_version(fmi_version)
+    check_compiler(cc)  # before creating anything
     out_path = Path(out_path)
     out_path.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="djl-fmu-build-") as tmp:
@@ -184,5 +205,6 @@ def default_fmu(fmi_version: int = 2, *, cc: str = "gcc",
     digest = _sources_digest(fmi_version, cc, extra_cflags)
     path = cache_dir() / f"{spec.MODEL_IDENTIFIER}-fmi{fmi_version}-{digest}.fmu"
     if not path.is_file():
+        check_compiler(cc)  # before creating anything
         build_fmu(fmi_version, path, cc=cc, extra_cflags=extra_cflags)
     return path

@@ -18,6 +18,7 @@ import ctypes
 import math
 import shutil
 import tempfile
+import weakref
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -68,6 +69,58 @@ class LogRecord:
         return f"[{label}] {self.category}: {self.message}"
 
 
+MAX_FMU_UNPACKED = 256 * 2**20
+"""Largest unpacked size of an FMU file (bytes, the sum of its zip entries' declared
+sizes): a larger one is refused before anything is unpacked."""
+
+MAX_FMU_ENTRIES = 10_000
+"""Largest number of files in an FMU."""
+
+
+def check_fmu_archive(path: str | Path) -> None:
+    """Check that ``path`` is a zip file small enough to unpack (without unpacking it).
+
+    Raises
+    ------
+    ValueError
+        Naming the file: not a file, not a zip archive, more than
+        :data:`MAX_FMU_ENTRIES` files, an unsafe member name, or a declared
+        unpacked size above :data:`MAX_FMU_UNPACKED`.
+    """
+    import zipfile
+
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"{path}: no such FMU file")
+    try:
+        with zipfile.ZipFile(path) as z:
+            infos = z.infolist()
+    except (zipfile.BadZipFile, OSError, ValueError) as e:
+        raise ValueError(f"cannot read {path} as an FMU: not a zip archive ({e})") from None
+    if len(infos) > MAX_FMU_ENTRIES:
+        raise ValueError(f"{path}: the FMU holds {len(infos)} files, more than the limit of "
+                         f"{MAX_FMU_ENTRIES}")
+    total = sum(i.file_size for i in infos)
+    if total > MAX_FMU_UNPACKED:
+        raise ValueError(f"{path}: the FMU would unpack to {total / 2**20:.0f} MiB, more than "
+                         f"the limit of {MAX_FMU_UNPACKED // 2**20} MiB (MAX_FMU_UNPACKED)")
+    for i in infos:
+        name = i.filename
+        if name.startswith(("/", "\\")) or ".." in Path(name).parts or ":" in name:
+            raise ValueError(f"{path}: unsafe file name in the FMU: {name!r}")
+
+
+def _read_fmu(path: Path) -> Any:
+    """Check the archive and read its model description; ``ValueError`` naming the file."""
+    from fmpy import read_model_description
+
+    check_fmu_archive(path)
+    try:
+        return read_model_description(str(path))
+    except Exception as e:  # noqa: BLE001 - any failure means "not an FMU"
+        raise ValueError(f"{path}: cannot read the FMU's model description: {e}") from None
+
+
 class GeneratorFMU:
     """One instance of the generator FMU, stepped through fmpy.
 
@@ -108,32 +161,70 @@ class GeneratorFMU:
         debug_logging: bool = False,
         echo: bool = False,
     ) -> None:
-        from fmpy import extract, read_model_description
+        from fmpy import extract
 
         if fmu is None:
             from .build import default_fmu
 
             fmu = default_fmu(fmi_version)
         self.path = Path(fmu)
-        self.md = read_model_description(str(self.path))
-        self.fmi_version = 3 if self.md.fmiVersion.startswith("3") else 2
         self.log: list[LogRecord] = []
         self._echo = echo
-        self._tmp = tempfile.mkdtemp(prefix="djl-fmu-")
-        self._unzipped = extract(str(self.path), unzipdir=self._tmp)
+        self._closed = False
+        self._initialized = False
+        self.fmu: Any = None
+        md = _read_fmu(self.path)
+        self.md = md
+        self.fmi_version = 3 if self.md.fmiVersion.startswith("3") else 2
         self._vars = {v.name: v for v in self.md.modelVariables}
         missing = [n for n in ("x", "v", "a", "j", "done", "Te", "profile") if n not in self._vars]
         if missing:
             raise ValueError(f"{self.path}: not a generator FMU, variables missing: {missing}")
-        self.time = float(start_time)
-        self._closed = False
-        self._instantiate(instance_name, debug_logging)
-        self.instance_name = instance_name
-        self._initialized = False
-        self.start_time = float(start_time)
-        self._setup()
-        if params:
-            self.set(params)
+        # the unzipped copy is removed by close(), on any failure below, and (as a last
+        # resort) when the object is garbage-collected or the interpreter exits
+        self._tmp = tempfile.mkdtemp(prefix="djl-fmu-")
+        self._finalizer = weakref.finalize(self, shutil.rmtree, self._tmp, ignore_errors=True)
+        try:
+            self._unzipped = extract(str(self.path), unzipdir=self._tmp)
+            self._check_binary()
+            self.time = float(start_time)
+            self._instantiate(instance_name, debug_logging)
+            self.instance_name = instance_name
+            self.start_time = float(start_time)
+            self._setup()
+            if params:
+                self.set(params)
+        except BaseException:
+            try:
+                self.close()
+            except Exception:  # noqa: BLE001 - report the first error, not this one
+                pass
+            raise
+
+    def _check_binary(self) -> None:
+        """Raise ``ValueError`` unless the FMU has a binary for this platform that loads."""
+        import fmpy
+
+        cs = self.md.coSimulation
+        if cs is None:
+            raise ValueError(f"{self.path}: not a co-simulation FMU")
+        plat = fmpy.platform if self.fmi_version == 2 else fmpy.platform_tuple
+        lib = (Path(self._unzipped) / "binaries" / plat
+               / (cs.modelIdentifier + fmpy.sharedLibraryExtension))
+        if not lib.is_file():
+            raise ValueError(f"{self.path}: the FMU has no binary for this platform "
+                             f"(binaries/{plat}/{lib.name})")
+        try:
+            handle = ctypes.CDLL(str(lib))
+        except OSError as e:
+            raise ValueError(f"{self.path}: the FMU's binary binaries/{plat}/{lib.name} cannot "
+                             f"be loaded: {str(e).replace(str(lib) + ': ', '')}") from None
+        try:
+            from fmpy import freeLibrary
+
+            freeLibrary(ctypes.c_void_p(handle._handle))
+        except Exception:  # noqa: BLE001
+            pass
 
     # ------------------------------------------------------------- plumbing
 
@@ -215,38 +306,51 @@ class GeneratorFMU:
         return sorted(els, key=lambda v: v.valueReference)
 
     def set(self, params: Mapping[str, ParamValue]) -> None:
-        """Set parameters by name (before :meth:`initialize`)."""
+        """Set parameters by name (before :meth:`initialize`).
+
+        Values are checked against the variable's type before anything is set:
+        an Integer/Int32 variable (``profile``, ``short_stage``, ``n_segments``)
+        takes an integer (a float only when it is a whole number: 2.9 is
+        refused, not truncated), a Real/Float64 a number, a Boolean a bool;
+        a bool is never taken for a number.
+
+        Raises
+        ------
+        TypeError
+            A value of the wrong type (the message names the variable).
+        ValueError
+            A non-whole float for an integer, or an integer out of the Int32 range.
+        KeyError
+            An unknown variable.
+        """
+        todo = []
         for name, value in params.items():
             if self.fmi_version == 3:
                 var = self.variable(name)
-                vals = list(np.atleast_1d(value)) if var.dimensions else [value]
+                vals = _as_list(name, value) if var.dimensions else [value]
                 if var.dimensions:
                     size = int(var.dimensions[0].start)
                     vals = (vals + [0.0] * size)[:size]
-                vr = [var.valueReference]
-                if var.type == "Float64":
-                    self._call(self.fmu.setFloat64, vr, [float(x) for x in vals])
-                elif var.type == "Int32":
-                    self._call(self.fmu.setInt32, vr, [int(x) for x in vals])
-                elif var.type == "Boolean":
-                    self._call(self.fmu.setBoolean, vr, [bool(x) for x in vals])
-                else:
-                    raise TypeError(f"{name}: unsupported type {var.type}")
+                vrs, typ = [var.valueReference], var.type
             else:
                 els = self._elements(name)
-                vals = list(np.atleast_1d(value)) if len(els) > 1 else [value]
+                vals = _as_list(name, value) if len(els) > 1 else [value]
                 if len(els) > 1:
                     vals = (vals + [0.0] * len(els))[: len(els)]
-                vrs = [e.valueReference for e in els]
-                typ = els[0].type
-                if typ == "Real":
-                    self._call(self.fmu.setReal, vrs, [float(x) for x in vals])
-                elif typ == "Integer":
-                    self._call(self.fmu.setInteger, vrs, [int(x) for x in vals])
-                elif typ == "Boolean":
-                    self._call(self.fmu.setBoolean, vrs, [bool(x) for x in vals])
-                else:
-                    raise TypeError(f"{name}: unsupported type {typ}")
+                vrs, typ = [e.valueReference for e in els], els[0].type
+            kind = {"Float64": "Real", "Real": "Real", "Int32": "Integer",
+                    "Integer": "Integer", "Boolean": "Boolean"}.get(typ)
+            if kind is None:
+                raise TypeError(f"{name}: unsupported type {typ}")
+            todo.append((kind, vrs, [_convert(name, kind, x) for x in vals]))
+        for kind, vrs, vals in todo:
+            if self.fmi_version == 3:
+                fn = {"Real": self.fmu.setFloat64, "Integer": self.fmu.setInt32,
+                      "Boolean": self.fmu.setBoolean}[kind]
+            else:
+                fn = {"Real": self.fmu.setReal, "Integer": self.fmu.setInteger,
+                      "Boolean": self.fmu.setBoolean}[kind]
+            self._call(fn, vrs, vals)
 
     def get(self, name: str) -> Any:
         """Value of one variable (arrays come back as numpy arrays)."""
@@ -407,13 +511,19 @@ class GeneratorFMU:
         if self._closed:
             return
         self._closed = True
+        finalizer = getattr(self, "_finalizer", None)
+        if self.fmu is None:  # the constructor failed before the instance existed
+            if finalizer is not None:
+                finalizer()
+            return
         try:
-            if self._initialized:
-                try:
-                    self.fmu.terminate()
-                except Exception:  # noqa: BLE001 - already in error: still free it
-                    pass
-            self.fmu.freeInstance()
+            if getattr(self.fmu, "component", None):
+                if self._initialized:
+                    try:
+                        self.fmu.terminate()
+                    except Exception:  # noqa: BLE001 - already in error: still free it
+                        pass
+                self.fmu.freeInstance()
         finally:
             try:
                 from fmpy import freeLibrary
@@ -421,13 +531,57 @@ class GeneratorFMU:
                 freeLibrary(ctypes.c_void_p(self.fmu.dll._handle))
             except Exception:  # noqa: BLE001
                 pass
-            shutil.rmtree(self._tmp, ignore_errors=True)
+            if finalizer is not None:
+                finalizer()
 
     def __enter__(self) -> GeneratorFMU:
         return self
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _as_list(name: str, value: Any) -> list[Any]:
+    """Return the elements of an array parameter's value (a scalar is one element)."""
+    if isinstance(value, (str, bytes)) or isinstance(value, Mapping):
+        raise TypeError(f"{name}: expected a number or a sequence of numbers, got {value!r}")
+    try:
+        return list(np.atleast_1d(np.asarray(value, dtype=object)).ravel())
+    except Exception as e:  # noqa: BLE001
+        raise TypeError(f"{name}: expected a sequence of numbers, got {value!r}") from e
+
+
+_INT32 = (-(2**31), 2**31 - 1)
+
+
+def _convert(name: str, kind: str, x: Any) -> Any:
+    """Check one value for an FMU variable of ``kind`` (Real, Integer, Boolean); return it."""
+    if kind == "Boolean":
+        if isinstance(x, (bool, np.bool_)):
+            return bool(x)
+        raise TypeError(f"{name}: a Boolean variable takes True or False, got {x!r}")
+    if isinstance(x, (bool, np.bool_)):
+        art = "an" if kind == "Integer" else "a"
+        raise TypeError(f"{name}: {art} {kind} variable takes a number, not the bool {x!r}")
+    if kind == "Integer":
+        if isinstance(x, (int, np.integer)):
+            v = int(x)
+        elif isinstance(x, (float, np.floating)):
+            if not (math.isfinite(x) and float(x).is_integer()):
+                raise ValueError(f"{name}: an Integer variable takes a whole number, got {x!r} "
+                                 f"(not rounded or truncated)")
+            v = int(x)
+        else:
+            raise TypeError(f"{name}: an Integer variable takes an int, got {x!r}")
+        if not _INT32[0] <= v <= _INT32[1]:
+            raise ValueError(f"{name}: {v} is outside the 32-bit integer range")
+        return v
+    if isinstance(x, (int, float, np.integer, np.floating)):
+        try:
+            return float(x)
+        except OverflowError:
+            raise ValueError(f"{name}: {x!r} is too large for a Real") from None
+    raise TypeError(f"{name}: a Real variable takes a number, got {x!r}")
 
 
 def motion_start(t_start: float, start_time: float, Te: float) -> float:

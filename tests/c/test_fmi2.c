@@ -12,6 +12,7 @@
 #include "check.h"
 #include "djl_vars.h"
 #include "fmi2Functions.h"
+#include "fmu_model.h" /* model_data / model_state_seal: forging states with a valid checksum */
 
 static int errors_logged = 0;
 static char last_message[2048];
@@ -175,11 +176,330 @@ static void run_two_instances(void)
     fmi2FreeInstance(b);
 }
 
-int main(void)
+/* ------------------------------------------------ null pointer arguments */
+
+static fmi2Component ready(const char *name)
 {
+    fmi2Component c = make(name);
+    CHECK(fmi2EnterInitializationMode(c) == fmi2OK, "enter");
+    CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit");
+    return c;
+}
+
+/* The instance is still usable: steps and outputs as a fresh one. */
+static void still_usable(fmi2Component c, double t)
+{
+    fmi2Status st;
+    CHECK(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &t) == fmi2OK, "time");
+    st = fmi2DoStep(c, t, 1e-3, fmi2True);
+    CHECK(st == fmi2OK, "step after a refused call: %d (%s)", (int)st, last_message);
+    CHECK(isfinite(get_real(c, VR_X)), "x");
+}
+
+static void run_null_pointers(void)
+{
+    fmi2Component c = make("nulls");
+    fmi2ValueReference vr = VR_V_MAX, vrs[2] = {VR_X, VR_V};
+    fmi2Real r = 0.0;
+    fmi2Integer i = 0;
+    fmi2Boolean b = 0;
+    fmi2String str = NULL;
+    fmi2FMUstate s = NULL, s2 = NULL;
+    fmi2Status st = fmi2OK;
+    const fmi2String cats_bad[2] = {"logEvents", NULL};
+    size_t size = 0;
+    fmi2Byte *buf;
+    /* before initialization: setters */
+    expect_error(fmi2SetReal(c, &vr, 1, NULL), "fmi2SetReal: argument value is a null pointer");
+    expect_error(fmi2SetReal(c, NULL, 1, &r), "fmi2SetReal: argument vr is a null pointer");
+    vr = VR_PROFILE;
+    expect_error(fmi2SetInteger(c, &vr, 1, NULL), "fmi2SetInteger: argument value");
+    expect_error(fmi2SetBoolean(c, &vr, 1, NULL), "fmi2SetBoolean: argument value");
+    expect_error(fmi2SetString(c, &vr, 1, NULL), "fmi2SetString: argument value");
+    expect_error(fmi2SetString(c, NULL, 1, &str), "fmi2SetString: argument vr");
+    expect_error(fmi2SetDebugLogging(c, fmi2True, 2, NULL), "fmi2SetDebugLogging: argument "
+                 "categories");
+    expect_error(fmi2SetDebugLogging(c, fmi2True, 2, cats_bad), "categories[1] is a null pointer");
+    CHECK(fmi2SetReal(c, NULL, 0, NULL) == fmi2OK, "nvr = 0 with NULL arrays is a no-op");
+    vr = VR_V_MAX;
+    set_real(c, VR_V_MAX, 0.9); /* still usable */
+    CHECK(fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) == fmi2OK,
+          "initialization after refused calls: %s", last_message);
+    /* getters */
+    expect_error(fmi2GetReal(c, vrs, 2, NULL), "fmi2GetReal: argument value is a null pointer");
+    expect_error(fmi2GetReal(c, NULL, 2, &r), "fmi2GetReal: argument vr");
+    vr = VR_PROFILE;
+    expect_error(fmi2GetInteger(c, &vr, 1, NULL), "fmi2GetInteger: argument value");
+    vr = VR_DONE;
+    expect_error(fmi2GetBoolean(c, &vr, 1, NULL), "fmi2GetBoolean: argument value");
+    expect_error(fmi2GetString(c, &vr, 1, NULL), "fmi2GetString: argument value");
+    CHECK(fmi2GetBoolean(c, &vr, 1, &b) == fmi2OK, "get boolean");
+    (void)i;
+    /* status */
+    expect_error(fmi2GetStatus(c, fmi2DoStepStatus, NULL), "fmi2GetStatus: argument value");
+    expect_error(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, NULL), "fmi2GetRealStatus: argument "
+                 "value");
+    expect_error(fmi2GetBooleanStatus(c, fmi2Terminated, NULL), "fmi2GetBooleanStatus: argument "
+                 "value");
+    /* FMU state */
+    expect_error(fmi2GetFMUstate(c, NULL), "fmi2GetFMUstate: argument FMUstate");
+    expect_error(fmi2SetFMUstate(c, NULL), "fmi2SetFMUstate: argument FMU state");
+    expect_error(fmi2FreeFMUstate(c, NULL), "fmi2FreeFMUstate: argument FMUstate");
+    CHECK(fmi2FreeFMUstate(c, &s) == fmi2OK, "free of a NULL state is ignored");
+    CHECK(fmi2GetFMUstate(c, &s) == fmi2OK && s, "get state");
+    expect_error(fmi2SerializedFMUstateSize(c, s, NULL), "fmi2SerializedFMUstateSize: argument "
+                 "size");
+    expect_error(fmi2SerializedFMUstateSize(c, NULL, &size), "fmi2SerializedFMUstateSize: "
+                 "argument FMUstate");
+    CHECK(fmi2SerializedFMUstateSize(c, s, &size) == fmi2OK, "size");
+    buf = (fmi2Byte *)malloc(size);
+    expect_error(fmi2SerializeFMUstate(c, s, NULL, size), "fmi2SerializeFMUstate: argument "
+                 "serializedState");
+    expect_error(fmi2SerializeFMUstate(c, NULL, buf, size), "fmi2SerializeFMUstate: argument FMU "
+                 "state");
+    expect_error(fmi2SerializeFMUstate(c, s, buf, size - 1), "buffer of");
+    CHECK(fmi2SerializeFMUstate(c, s, buf, size) == fmi2OK, "serialize");
+    expect_error(fmi2DeSerializeFMUstate(c, NULL, size, &s2), "fmi2DeSerializeFMUstate: argument "
+                 "serializedState");
+    expect_error(fmi2DeSerializeFMUstate(c, buf, size, NULL), "fmi2DeSerializeFMUstate: argument "
+                 "FMUstate");
+    CHECK(fmi2DeSerializeFMUstate(c, buf, size, &s2) == fmi2OK && s2, "deserialize");
+    CHECK(fmi2SetFMUstate(c, s2) == fmi2OK, "set");
+    still_usable(c, 0.0);
+    fmi2FreeFMUstate(c, &s);
+    fmi2FreeFMUstate(c, &s2);
+    free(buf);
+    /* no instance: an error (no logger to tell) */
+    CHECK(fmi2SetReal(NULL, &vr, 1, &r) == fmi2Error, "null instance set");
+    CHECK(fmi2GetReal(NULL, &vr, 1, &r) == fmi2Error, "null instance get");
+    CHECK(fmi2GetFMUstate(NULL, &s) == fmi2Error, "null instance state");
+    CHECK(fmi2SetDebugLogging(NULL, fmi2True, 0, NULL) == fmi2Error, "null instance logging");
+    CHECK(fmi2Reset(NULL) == fmi2Error, "null instance reset");
+    CHECK(fmi2FreeFMUstate(NULL, &s) == fmi2Error, "null instance free state");
+    fmi2FreeInstance(NULL);
+    (void)st;
+    fmi2FreeInstance(c);
+}
+
+/* ---------------------------------------------- corrupted FMU states */
+
+static uint64_t rng = 0x9e3779b97f4a7c15u;
+static uint64_t next_rand(void)
+{
+    rng ^= rng << 13;
+    rng ^= rng >> 7;
+    rng ^= rng << 17;
+    return rng;
+}
+
+#define REPLAY 40
+
+/* Outputs over REPLAY steps from the instance's current time. */
+static void replay(fmi2Component c, double out[REPLAY][5], fmi2Status *worst)
+{
+    fmi2ValueReference vrs[4] = {VR_X, VR_V, VR_A, VR_J};
+    fmi2ValueReference vr_done = VR_DONE;
+    double t = 0.0, h = 1e-3;
+    fmi2Boolean done = 0;
+    fmi2ValueReference vr_te = VR_TE;
+    int k;
+    fmi2Status st;
+    *worst = fmi2OK;
+    if (fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &t) != fmi2OK) *worst = fmi2Error;
+    if (fmi2GetReal(c, &vr_te, 1, &h) != fmi2OK) *worst = fmi2Error;
+    for (k = 0; k < REPLAY; k++) {
+        st = fmi2DoStep(c, t, h, fmi2True);
+        if (st > *worst) *worst = st;
+        t += h;
+        st = fmi2GetReal(c, vrs, 4, out[k]);
+        if (st > *worst) *worst = st;
+        st = fmi2GetBoolean(c, &vr_done, 1, &done);
+        if (st > *worst) *worst = st;
+        out[k][4] = done;
+    }
+}
+
+/* Damage a copy of the state: a few bytes xor-ed with non-zero values, a
+ * run of random bytes, or a single bit; at least one byte always changes. */
+static void corrupt(fmi2Byte *b, size_t size)
+{
+    size_t pos, n, k;
+    switch (next_rand() % 3) {
+    case 0:
+        n = 1 + next_rand() % 4;
+        for (k = 0; k < n; k++) b[next_rand() % size] ^= (fmi2Byte)(1 + next_rand() % 255);
+        break;
+    case 1:
+        n = 1 + next_rand() % 16;
+        pos = next_rand() % (size - n);
+        b[pos] ^= (fmi2Byte)(1 + next_rand() % 255);
+        for (k = 1; k < n; k++) b[pos + k] = (fmi2Byte)next_rand();
+        break;
+    default:
+        pos = next_rand() % size;
+        b[pos] ^= (fmi2Byte)(1u << (next_rand() % 8));
+    }
+}
+
+static void reseal(fmi2Byte *b)
+{
+    model_data d;
+    memcpy(&d, b, sizeof d);
+    model_state_seal(&d);
+    memcpy(b, &d, sizeof d);
+}
+
+/* n corruptions of a mid-motion serialized state.  Plain: every one must be
+ * refused (checksum) with a message, or replay identically.  Resealed (the
+ * checksum recomputed after the damage, as a forger would): the structural
+ * checks must refuse it, or it must run without crash; Reset always works. */
+static void run_state_fuzz(long n, long n_sealed)
+{
+    fmi2Component c = make("fuzz");
+    fmi2ValueReference vr_n = VR_N_SEGMENTS, vr_d = VR_SEG_DISTANCE, vr_v = VR_SEG_V_END;
+    fmi2Integer nseg = 3;
+    double dist[3] = {0.1, 0.25, -0.05}, ve[3] = {0.4, 0.0, 0.0}, t = 0.0;
+    static double ref[REPLAY][5], got[REPLAY][5];
+    fmi2FMUstate s = NULL, s2 = NULL;
+    fmi2Byte *buf, *work;
+    size_t size = 0;
+    long it, refused = 0, accepted = 0, refused_sealed = 0, accepted_sealed = 0, same_sealed = 0;
+    fmi2Status worst;
+    int k, sealed;
+    fmi2ValueReference vrd[3], vrv[3];
+    for (k = 0; k < 3; k++) {
+        vrd[k] = vr_d + (fmi2ValueReference)k;
+        vrv[k] = vr_v + (fmi2ValueReference)k;
+    }
+    CHECK(fmi2SetInteger(c, &vr_n, 1, &nseg) == fmi2OK, "n");
+    CHECK(fmi2SetReal(c, vrd, 3, dist) == fmi2OK, "d");
+    CHECK(fmi2SetReal(c, vrv, 3, ve) == fmi2OK, "v");
+    CHECK(fmi2EnterInitializationMode(c) == fmi2OK, "enter");
+    CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit: %s", last_message);
+    for (k = 0; k < 400; k++, t += 1e-3) fmi2DoStep(c, t, 1e-3, fmi2True);
+    CHECK(fmi2GetFMUstate(c, &s) == fmi2OK, "get state");
+    CHECK(fmi2SerializedFMUstateSize(c, s, &size) == fmi2OK, "size");
+    buf = (fmi2Byte *)malloc(size);
+    work = (fmi2Byte *)malloc(size);
+    CHECK(fmi2SerializeFMUstate(c, s, buf, size) == fmi2OK, "serialize");
+    replay(c, ref, &worst);
+    CHECK(worst == fmi2OK, "reference replay");
+    for (it = 0; it < n + n_sealed; it++) {
+        fmi2Status st;
+        sealed = it >= n;
+        memcpy(work, buf, size);
+        corrupt(work, size);
+        if (sealed) reseal(work);
+        last_message[0] = '\0';
+        st = fmi2DeSerializeFMUstate(c, work, size, &s2);
+        if (st != fmi2OK) {
+            CHECK(st == fmi2Error, "refusal status %d", (int)st);
+            CHECK(strstr(last_message, "fmi2DeSerializeFMUstate") != NULL, "refusal message "
+                  "\"%s\"", last_message);
+            if (sealed) refused_sealed++;
+            else refused++;
+            continue;
+        }
+        CHECK(fmi2SetFMUstate(c, s2) == fmi2OK, "set accepted state: %s", last_message);
+        replay(c, got, &worst);
+        if (sealed) {
+            accepted_sealed++;
+            same_sealed += worst == fmi2OK && memcmp(ref, got, sizeof ref) == 0;
+        } else {
+            accepted++;
+            CHECK(worst == fmi2OK && memcmp(ref, got, sizeof ref) == 0,
+                  "accepted corrupted state does not replay identically (iteration %ld)", it);
+        }
+        CHECK(fmi2Reset(c) == fmi2OK, "reset after an accepted state");
+        CHECK(fmi2DeSerializeFMUstate(c, buf, size, &s2) == fmi2OK, "good state after reset");
+        CHECK(fmi2SetFMUstate(c, s2) == fmi2OK, "set good state after reset");
+    }
+    /* the instance is as good as before */
+    CHECK(fmi2SetFMUstate(c, s) == fmi2OK, "set");
+    replay(c, got, &worst);
+    CHECK(worst == fmi2OK && memcmp(ref, got, sizeof ref) == 0, "replay after the fuzz");
+    CHECK(refused + accepted == n, "count");
+    printf("fmi2 state fuzz: %ld corruptions: %ld refused, %ld accepted (identical replay); "
+           "%ld resealed: %ld refused, %ld accepted (ran, no crash; %ld of them replay identically)\n",
+           n, refused, accepted, n_sealed, refused_sealed, accepted_sealed, same_sealed);
+    fmi2FreeFMUstate(c, &s);
+    fmi2FreeFMUstate(c, &s2);
+    free(buf);
+    free(work);
+    fmi2FreeInstance(c);
+}
+
+/* Targeted structural damage with a valid checksum: each is refused by name. */
+static void run_forged_states(void)
+{
+    fmi2Component c = ready("forged");
+    fmi2FMUstate s = NULL, s2 = NULL;
+    size_t size = 0;
+    fmi2Byte *buf;
+    model_data d;
+    int k;
+    double t = 0.0;
+    for (k = 0; k < 50; k++, t += 1e-3) fmi2DoStep(c, t, 1e-3, fmi2True);
+    fmi2GetFMUstate(c, &s);
+    fmi2SerializedFMUstateSize(c, s, &size);
+    buf = (fmi2Byte *)malloc(size);
+    fmi2SerializeFMUstate(c, s, buf, size);
+#define FORGE(stmt, fragment)                                                                     \
+    do {                                                                                         \
+        memcpy(&d, buf, sizeof d);                                                               \
+        stmt;                                                                                    \
+        model_state_seal(&d);                                                                    \
+        expect_error(fmi2DeSerializeFMUstate(c, (const fmi2Byte *)&d, sizeof d, &s2), fragment); \
+        expect_error(fmi2SetFMUstate(c, &d), fragment);                                          \
+    } while (0)
+    FORGE(d.state = 64, "state machine value 64");
+    FORGE(d.state = MS_ERROR, "state machine value 32");
+    FORGE(d.planned = 2, "planned flag");
+    FORGE(d.plan.n_pieces = 100000, "piece count");
+    FORGE(d.plan.n_pieces = 0, "piece count");
+    FORGE(d.cursor = d.plan.n_pieces, "cursor");
+    FORGE(d.cursor = -1, "cursor");
+    FORGE(d.plan.n_segments = 33, "segment count");
+    FORGE(d.plan.piece[1].k = d.plan.piece[2].k + 1, "not in order");
+    FORGE(d.plan.piece[0].x = NAN, "not finite");
+    FORGE(d.offset = NAN, "offset");
+    FORGE(d.offset = 0.5, "offset");
+    FORGE(d.start_time = INFINITY, "start time");
+    FORGE(d.n = -1, "sample counter");
+    FORGE(d.p.Te = 0.0, "parameters are invalid");
+    FORGE(d.p.v_max = 2.0, "not made from its parameters");
+    FORGE(d.out.x += 1e-9, "outputs are not those of its plan");
+    FORGE(d.planned = 0, "without a plan");
+    /* unchecked: the checksum alone */
+    memcpy(&d, buf, sizeof d);
+    d.plan.seg[0].frac += 1.0;
+    expect_error(fmi2DeSerializeFMUstate(c, (const fmi2Byte *)&d, sizeof d, &s2), "checksum");
+#undef FORGE
+    /* refusals left the instance as it was */
+    still_usable(c, 0.0);
+    /* from the Error state, a stored state can be restored, and Reset always works */
+    expect_error(fmi2DoStep(c, 0.0, 1.5e-3, fmi2True), "must start where");
+    CHECK(fmi2SetFMUstate(c, s) == fmi2OK, "restore from the Error state: %s", last_message);
+    still_usable(c, 0.0);
+    expect_error(fmi2DoStep(c, 0.0, 1.5e-3, fmi2True), "must start where");
+    CHECK(fmi2Reset(c) == fmi2OK, "reset from Error");
+    fmi2FreeFMUstate(c, &s);
+    free(buf);
+    fmi2FreeInstance(c);
+}
+
+int main(int argc, char **argv)
+{
+    /* argv[1]: corruptions of a serialized state (10^6 for the full campaign of
+     * issue #10: ./test_fmi2 1000000), argv[2]: resealed ones (default a tenth) */
+    long n_fuzz = argc > 1 ? atol(argv[1]) : 100000;
+    long n_sealed = argc > 2 ? atol(argv[2]) : n_fuzz / 10;
     run_states();
     run_bad_inputs();
     run_two_instances();
+    run_null_pointers();
+    run_forged_states();
+    run_state_fuzz(n_fuzz, n_sealed);
     printf("fmi2: %d failures, %d errors logged\n", failures, errors_logged);
     return failures ? 1 : 0;
 }

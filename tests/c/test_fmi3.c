@@ -137,10 +137,157 @@ static void run_bad_inputs(void)
                                       NULL) == NULL, "token");
 }
 
+/* ------------------------------------------------ null pointer arguments */
+
+static fmi3Instance ready(const char *name)
+{
+    fmi3Instance c = make(name, 1);
+    CHECK(fmi3EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3False, 0.0) == fmi3OK, "enter");
+    CHECK(fmi3ExitInitializationMode(c) == fmi3OK, "exit");
+    return c;
+}
+
+static double now_of(fmi3Instance c)
+{
+    fmi3ValueReference vr = VR_TIME;
+    double t = NAN;
+    CHECK(fmi3GetFloat64(c, &vr, 1, &t, 1) == fmi3OK, "time");
+    return t;
+}
+
+static void still_usable(fmi3Instance c)
+{
+    fmi3Boolean eh, term, early;
+    fmi3Float64 last;
+    fmi3ValueReference vr = VR_X;
+    double x = NAN, t = now_of(c);
+    fmi3Status st = fmi3DoStep(c, t, 1e-3, fmi3True, &eh, &term, &early, &last);
+    CHECK(st == fmi3OK, "step after a refused call: %d (%s)", (int)st, last_message);
+    CHECK(fmi3GetFloat64(c, &vr, 1, &x, 1) == fmi3OK && isfinite(x), "x");
+}
+
+static void run_null_pointers(void)
+{
+    fmi3Instance c = make("nulls", 1);
+    fmi3ValueReference vr = VR_V_MAX, vr_n = VR_N_SEGMENTS, vr_done = VR_DONE;
+    double v = 0.5, seg[DJL_VARS_MAX_SEGMENTS];
+    fmi3Int32 i32 = 0;
+    fmi3Boolean b = fmi3False, eh, term, early;
+    fmi3Float64 last;
+    fmi3FMUState s = NULL, s2 = NULL;
+    fmi3Byte *buf;
+    size_t size = 0, nd = 0, sizes[1] = {0};
+    const fmi3String cats_bad[2] = {"logEvents", NULL};
+    fmi3Binary bin[1] = {NULL};
+    expect_error(fmi3SetFloat64(c, &vr, 1, NULL, 1), "fmi3SetFloat64: argument values is a null "
+                 "pointer");
+    expect_error(fmi3SetFloat64(c, NULL, 1, &v, 1), "fmi3SetFloat64: argument valueReferences");
+    expect_error(fmi3SetInt32(c, &vr_n, 1, NULL, 1), "fmi3SetInt32: argument values");
+    expect_error(fmi3SetBoolean(c, &vr_done, 1, NULL, 1), "fmi3SetBoolean: argument values");
+    expect_error(fmi3SetFloat32(c, &vr, 1, NULL, 1), "fmi3SetFloat32: argument values");
+    expect_error(fmi3SetString(c, NULL, 1, NULL, 1), "fmi3SetString: argument valueReferences");
+    expect_error(fmi3SetBinary(c, &vr, 1, NULL, bin, 1), "fmi3SetBinary: argument valueSizes");
+    expect_error(fmi3SetClock(c, &vr, 1, NULL), "fmi3SetClock: argument values");
+    expect_error(fmi3SetDebugLogging(c, fmi3True, 1, NULL), "fmi3SetDebugLogging: argument "
+                 "categories");
+    expect_error(fmi3SetDebugLogging(c, fmi3True, 2, cats_bad), "categories[1] is a null pointer");
+    /* a bad count refuses the whole call before anything is written */
+    vr = VR_SEG_DISTANCE;
+    CHECK(fmi3GetFloat64(c, &vr, 1, seg, DJL_VARS_MAX_SEGMENTS) == fmi3OK, "get array");
+    seg[0] = 123.0;
+    expect_error(fmi3SetFloat64(c, &vr, 1, seg, DJL_VARS_MAX_SEGMENTS + 1), "nValues");
+    CHECK(fmi3Reset(c) == fmi3OK, "reset");
+    CHECK(fmi3GetFloat64(c, &vr, 1, seg, DJL_VARS_MAX_SEGMENTS) == fmi3OK && seg[0] != 123.0,
+          "nothing set by a refused call");
+    vr = VR_V_MAX;
+    CHECK(fmi3SetFloat64(c, &vr, 1, &v, 1) == fmi3OK, "still usable: %s", last_message);
+    CHECK(fmi3EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3False, 0.0) == fmi3OK, "enter");
+    CHECK(fmi3ExitInitializationMode(c) == fmi3OK, "exit: %s", last_message);
+    /* getters */
+    vr = VR_X;
+    expect_error(fmi3GetFloat64(c, &vr, 1, NULL, 1), "fmi3GetFloat64: argument values");
+    expect_error(fmi3GetFloat64(c, NULL, 1, &v, 1), "fmi3GetFloat64: argument valueReferences");
+    expect_error(fmi3GetInt32(c, &vr_n, 1, NULL, 1), "fmi3GetInt32: argument values");
+    expect_error(fmi3GetBoolean(c, &vr_done, 1, NULL, 1), "fmi3GetBoolean: argument values");
+    expect_error(fmi3GetUInt64(c, &vr, 1, NULL, 1), "fmi3GetUInt64: argument values");
+    expect_error(fmi3GetBinary(c, &vr, 1, NULL, bin, 1), "fmi3GetBinary: argument valueSizes");
+    expect_error(fmi3GetBinary(c, &vr, 1, sizes, NULL, 1), "fmi3GetBinary: argument values");
+    expect_error(fmi3GetClock(c, &vr, 1, NULL), "fmi3GetClock: argument values");
+    CHECK(fmi3GetInt32(c, &vr_n, 1, &i32, 1) == fmi3OK && fmi3GetBoolean(c, &vr_done, 1, &b, 1)
+          == fmi3OK, "gets");
+    expect_error(fmi3GetNumberOfEventIndicators(c, NULL), "fmi3GetNumberOfEventIndicators: "
+                 "argument nEventIndicators");
+    expect_error(fmi3GetNumberOfContinuousStates(c, NULL), "fmi3GetNumberOfContinuousStates: "
+                 "argument nContinuousStates");
+    /* do step: every output pointer is required, refused before stepping */
+    expect_error(fmi3DoStep(c, 0.0, 1e-3, fmi3True, NULL, &term, &early, &last),
+                 "fmi3DoStep: argument eventHandlingNeeded");
+    expect_error(fmi3DoStep(c, 0.0, 1e-3, fmi3True, &eh, &term, &early, NULL),
+                 "fmi3DoStep: argument lastSuccessfulTime");
+    CHECK(now_of(c) == 0.0, "no step taken");
+    still_usable(c);
+    /* FMU state */
+    expect_error(fmi3GetFMUState(c, NULL), "fmi3GetFMUState: argument FMUState");
+    expect_error(fmi3SetFMUState(c, NULL), "fmi3SetFMUState: argument FMU state");
+    expect_error(fmi3FreeFMUState(c, NULL), "fmi3FreeFMUState: argument FMUState");
+    CHECK(fmi3GetFMUState(c, &s) == fmi3OK && s, "get state");
+    expect_error(fmi3SerializedFMUStateSize(c, s, NULL), "fmi3SerializedFMUStateSize: argument "
+                 "size");
+    expect_error(fmi3SerializedFMUStateSize(c, NULL, &size), "fmi3SerializedFMUStateSize: "
+                 "argument FMUState");
+    CHECK(fmi3SerializedFMUStateSize(c, s, &size) == fmi3OK, "size");
+    buf = (fmi3Byte *)malloc(size);
+    expect_error(fmi3SerializeFMUState(c, s, NULL, size), "fmi3SerializeFMUState: argument "
+                 "serializedState");
+    CHECK(fmi3SerializeFMUState(c, s, buf, size) == fmi3OK, "serialize");
+    expect_error(fmi3DeserializeFMUState(c, NULL, size, &s2), "fmi3DeserializeFMUState: argument "
+                 "serializedState");
+    expect_error(fmi3DeserializeFMUState(c, buf, size, NULL), "fmi3DeserializeFMUState: argument "
+                 "FMUState");
+    buf[size / 2] ^= 1;
+    expect_error(fmi3DeserializeFMUState(c, buf, size, &s2), "checksum");
+    buf[size / 2] ^= 1;
+    CHECK(fmi3DeserializeFMUState(c, buf, size, &s2) == fmi3OK, "deserialize");
+    CHECK(fmi3SetFMUState(c, s2) == fmi3OK, "set");
+    still_usable(c);
+    fmi3FreeFMUState(c, &s);
+    fmi3FreeFMUState(c, &s2);
+    free(buf);
+    /* no instance */
+    CHECK(fmi3SetFloat64(NULL, &vr, 1, &v, 1) == fmi3Error, "null instance");
+    CHECK(fmi3GetFloat64(NULL, &vr, 1, &v, 1) == fmi3Error, "null instance");
+    CHECK(fmi3GetNumberOfVariableDependencies(NULL, vr, &nd) == fmi3Error, "null instance");
+    CHECK(fmi3Reset(NULL) == fmi3Error, "null instance");
+    fmi3FreeInstance(NULL);
+    fmi3FreeInstance(c);
+}
+
+/* Variable dependencies are not provided: an error with a message that leaves
+ * the instance usable (item 7 of issue #10). */
+static void run_dependencies(void)
+{
+    fmi3Instance c = ready("deps");
+    size_t nd = 99, ei[1], eo[1];
+    fmi3ValueReference ind[1];
+    fmi3DependencyKind kinds[1];
+    expect_error(fmi3GetNumberOfVariableDependencies(c, VR_X, &nd),
+                 "fmi3GetNumberOfVariableDependencies (value reference");
+    CHECK(nd == 99, "nothing written");
+    expect_error(fmi3GetNumberOfVariableDependencies(c, VR_X, NULL), "argument nDependencies");
+    expect_error(fmi3GetVariableDependencies(c, VR_X, ei, ind, eo, kinds, 1),
+                 "fmi3GetVariableDependencies (value reference");
+    still_usable(c);
+    still_usable(c);
+    CHECK(fmi3Terminate(c) == fmi3OK, "terminate after refused dependency calls");
+    fmi3FreeInstance(c);
+}
+
 int main(void)
 {
     run_multisegment_and_state();
     run_bad_inputs();
+    run_null_pointers();
+    run_dependencies();
     printf("fmi3: %d failures\n", failures);
     return failures ? 1 : 0;
 }

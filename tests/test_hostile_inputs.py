@@ -1,0 +1,325 @@
+"""Issue #10 item 9: a user's bad input is a one-line error (exit 2) or a failure (exit 1),
+never a traceback or a silent wrong result; nothing is written."""
+
+from __future__ import annotations
+
+import gc
+import os
+import subprocess
+import sys
+import tempfile
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from harness.cli import main
+from harness.scenario import ScenarioError, load_scenario
+
+BASE = """\
+name = "hostile"
+
+[simulation]
+t_after = 0.5
+
+[move]
+distance = 0.3
+v_max = 2.0
+a_max = 4.0
+
+[z]
+distance = 0.3
+a_max = 8.0
+v_max = 2.0
+
+[[mode]]
+zeta = 0.04
+law = "linear"
+z = [0.0, 0.5]
+f = [10.5, 7.035]
+"""
+
+BIG = "1" + "0" * 400
+
+
+def _write(tmp_path: Path, text: str, name: str = "s.toml") -> Path:
+    p = tmp_path / name
+    p.write_text(text, encoding="utf-8")
+    return p
+
+
+def _refused(path: Path, key: str) -> str:
+    with pytest.raises(ScenarioError) as ei:
+        load_scenario(path)
+    msg = str(ei.value)
+    assert str(path) in msg and key in msg and "\n" not in msg
+    return msg
+
+
+# ------------------------------------------------------------ 1. encoding, huge integers
+
+def test_not_utf8_is_a_scenario_error(tmp_path, capsys):
+    p = tmp_path / "latin.toml"
+    p.write_bytes(BASE.replace("hostile", "h\xe9").encode("latin-1"))
+    with pytest.raises(ScenarioError, match="not UTF-8"):
+        load_scenario(p)
+    out = tmp_path / "out"
+    assert main(["simulate", str(p), "-o", str(out)]) == 2
+    assert "UTF-8" in capsys.readouterr().err and not out.exists()
+
+
+@pytest.mark.parametrize("text, key", [
+    (BASE.replace("distance = 0.3\nv_max", f"distance = {BIG}\nv_max"), "move.distance"),
+    (BASE + f"\n[sweep]\ndistance = [0.1, {BIG}]\n", "sweep.distance"),
+    (BASE + f"\n[sweep]\nv_max = [{BIG}]\n", "sweep.v_max"),
+    (BASE.replace("[simulation]", f"[simulation]\nfmi_version = {BIG}"),
+     "simulation.fmi_version"),
+], ids=["distance", "sweep-distance", "sweep-v_max", "fmi_version"])
+def test_400_digit_integer_names_the_key(tmp_path, text, key):
+    msg = _refused(_write(tmp_path, text), key)
+    assert len(msg) < 400  # the integer is not echoed in full
+
+
+# ------------------------------------------------------------ 2. strict FMU parameters
+
+@pytest.mark.parametrize("params, name, exc", [
+    ({"profile": 2.9}, "profile", ValueError),
+    ({"short_stage": 1.5}, "short_stage", ValueError),
+    ({"n_segments": 0.5}, "n_segments", ValueError),
+    ({"profile": True}, "profile", TypeError),
+    ({"distance": True}, "distance", TypeError),
+    ({"distance": "0.3"}, "distance", TypeError),
+    ({"profile": 2**40}, "profile", ValueError),
+])
+@pytest.mark.parametrize("version", [2, 3])
+def test_generate_rejects_wrong_types(params, name, exc, version):
+    from harness.fmu.runner import generate
+
+    with pytest.raises(exc, match=name):
+        generate(params, fmi_version=version)
+
+
+def test_set_rejects_float_for_integer_and_accepts_whole_float():
+    from harness.fmu.runner import GeneratorFMU
+
+    with GeneratorFMU() as g:
+        with pytest.raises(ValueError, match="profile"):
+            g.set({"profile": 2.9})
+        g.set({"profile": 2.0, "distance": 0.1})
+        g.initialize()
+        assert g.get("profile") == 2
+
+
+# ------------------------------------------------------------ 3. bad FMU files
+
+def _remade(tmp_path: Path, name: str, fn) -> Path:
+    from harness.fmu.build import default_fmu
+
+    dst = tmp_path / name
+    with zipfile.ZipFile(default_fmu(2)) as zi, zipfile.ZipFile(dst, "w") as zo:
+        for it in zi.infolist():
+            data = fn(it.filename, zi.read(it))
+            if data is not None:
+                zo.writestr(it.filename, data)
+    return dst
+
+
+@pytest.fixture
+def bad_fmus(tmp_path):
+    return {
+        "no binary": _remade(tmp_path, "nobin.fmu",
+                             lambda n, d: None if n.startswith("binaries/") else d),
+        "cannot be loaded": _remade(tmp_path, "corrupt.fmu",
+                                    lambda n, d: os.urandom(4096) if n.startswith("binaries/")
+                                    else d),
+    }
+
+
+@pytest.mark.parametrize("kind", ["no binary", "cannot be loaded"])
+def test_bad_fmu_binary_is_refused_at_load_time(tmp_path, capsys, bad_fmus, kind):
+    fmu = bad_fmus[kind]
+    scen = _write(tmp_path, BASE)
+    out = tmp_path / "out"
+    assert main(["simulate", str(scen), "--fmu", str(fmu), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert str(fmu) in err and kind in err and "Traceback" not in err and not out.exists()
+    # the same via simulation.fmu
+    scen2 = _write(tmp_path, BASE.replace("t_after = 0.5", f't_after = 0.5\nfmu = "{fmu.name}"'),
+                   "s2.toml")
+    _refused(scen2, "simulation.fmu")
+    assert main(["report", "--fmu", str(fmu), "-o", str(tmp_path / "r.html")]) == 2
+    assert kind in capsys.readouterr().err and not (tmp_path / "r.html").exists()
+    from harness.fmu.runner import GeneratorFMU
+
+    with pytest.raises(ValueError, match=kind):
+        GeneratorFMU(fmu)
+
+
+def test_oversized_fmu_is_refused_without_unpacking(tmp_path, monkeypatch):
+    from harness.fmu import runner
+
+    big = tmp_path / "big.fmu"
+    with zipfile.ZipFile(big, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("modelDescription.xml", "<x/>")
+        with z.open("resources/zeros.bin", "w") as f:
+            chunk = bytes(2**20)
+            for _ in range(runner.MAX_FMU_UNPACKED // 2**20 + 1):
+                f.write(chunk)
+    assert big.stat().st_size < 2**20
+    with pytest.raises(ValueError, match="MAX_FMU_UNPACKED"):
+        runner.check_fmu_archive(big)
+    before = set(Path(tempfile.gettempdir()).glob("djl-fmu-*"))
+    with pytest.raises(ValueError, match="MAX_FMU_UNPACKED"):
+        runner.GeneratorFMU(big)
+    assert set(Path(tempfile.gettempdir()).glob("djl-fmu-*")) == before
+    scen = _write(tmp_path, BASE.replace("t_after = 0.5", 't_after = 0.5\nfmu = "big.fmu"'))
+    _refused(scen, "simulation.fmu")
+
+
+# ------------------------------------------------------------ 4. no gcc
+
+def test_no_gcc_says_gcc_is_needed(tmp_path):
+    empty, cache = tmp_path / "bin", tmp_path / "cache"
+    empty.mkdir()
+    cache.mkdir()
+    scen = _write(tmp_path, BASE)
+    env = dict(os.environ, PATH=str(empty), DJL_FMU_CACHE=str(cache))
+    for argv in (["simulate", str(scen), "-o", str(tmp_path / "o1")],
+                 ["report", "--fast", "--claims", "1", "-o", str(tmp_path / "r.html")],
+                 ["build", "--fmi-version", "2", "-o", str(tmp_path / "b" / "g.fmu")],
+                 ["demo", "--out", str(tmp_path / "o2")]):
+        proc = subprocess.run([sys.executable, "-m", "harness.cli", *argv], env=env,
+                              capture_output=True, text=True, cwd=tmp_path, timeout=300)
+        assert proc.returncode == 1, (argv, proc.stderr)
+        assert "gcc" in proc.stderr and "Traceback" not in proc.stderr, (argv, proc.stderr)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bin", "cache", "s.toml"]
+    assert not any(cache.iterdir())
+
+
+# ------------------------------------------------------------ 5. unwritable outputs
+
+def _unwritable(tmp_path: Path) -> Path:
+    if os.geteuid() == 0:
+        return Path("/proc/djl-fmu-nowhere")  # not writable even by root
+    d = tmp_path / "ro"
+    d.mkdir()
+    d.chmod(0o500)
+    return d / "sub"
+
+
+def test_report_output_checked_first(tmp_path, capsys):
+    d = tmp_path / "adir"
+    d.mkdir()
+    assert main(["report", "-o", str(d)]) == 2
+    assert "directory" in capsys.readouterr().err
+    f = tmp_path / "afile"
+    f.write_text("x")
+    assert main(["report", "-o", str(f / "r.html")]) == 2
+    assert "not a directory" in capsys.readouterr().err
+    assert main(["report", "-o", str(_unwritable(tmp_path) / "r.html")]) == 2
+    assert "not writable" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("cmd", [["simulate", "{s}"], ["map", "X"], ["compare", "X"],
+                                 ["tune", "X", "--single"]])
+def test_out_checked_first(tmp_path, capsys, cmd):
+    scen = _write(tmp_path, BASE)
+    f = tmp_path / "afile"
+    f.write_text("x")
+    argv = [a.replace("{s}", str(scen)) for a in cmd]
+    for out, word in ((f, "not a directory"), (f / "sub", "is a file"),
+                      (_unwritable(tmp_path), "not writable")):
+        assert main([*argv, "-o", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert word in err and str(out) in err
+    assert f.read_text() == "x"
+
+
+# ------------------------------------------------------------ 6. bounded work
+
+@pytest.mark.parametrize("text, key, limit", [
+    (BASE.replace("t_after = 0.5", "t_after = 1e12"), "simulation.t_after",
+     "MAX_SAMPLES_PER_RUN"),
+    (BASE.replace("t_after = 0.5", "t_after = 3.0\nTe = 1e-7\nstep = 1e-7"), "simulation.Te",
+     "MAX_SAMPLES_PER_RUN"),
+    (BASE.replace("v_max = 2.0\na_max = 4.0", "v_max = 1e-6\na_max = 4.0"), "move.v_max",
+     "MAX_SAMPLES_PER_RUN"),
+    (BASE + "\n[sweep]\nv_max = [1e-6, 1.0]\n", "sweep.v_max", "MAX_SAMPLES_PER_RUN"),
+    (BASE + "\n[sweep]\ndistance = [" + ", ".join(f"{0.1 + i * 1e-4:.4f}" for i in range(1000))
+     + "]\nv_max = [" + ", ".join(f"{0.5 + i * 1e-3:.3f}" for i in range(1000)) + "]\n",
+     "sweep", "MAX_SWEEP_CASES"),
+    (BASE + "\n[map]\nz0 = [0.0, 0.01]\ndistance = ["
+     + ", ".join(f"{0.1 + i * 1e-4:.4f}" for i in range(1000)) + "]\nv_max = ["
+     + ", ".join(f"{0.5 + i * 1e-3:.3f}" for i in range(1000)) + "]\n", "map", "MAX_MAP_MOVES"),
+], ids=["t_after", "Te", "v_max", "sweep-v_max", "sweep-size", "map-size"])
+def test_too_much_work_is_refused(tmp_path, capsys, text, key, limit):
+    p = _write(tmp_path, text)
+    msg = _refused(p, key)
+    assert limit in msg
+    out = tmp_path / "out"
+    assert main(["simulate", str(p), "-o", str(out)]) == 2
+    assert limit in capsys.readouterr().err and not out.exists()
+
+
+# ------------------------------------------------------------ 7. absurd values
+
+@pytest.mark.parametrize("text, key", [
+    (BASE.replace("f = [10.5, 7.035]", "f = [10.5, 7.035]\ngain = 1e308"), "mode[1].gain"),
+    (BASE.replace("f = [10.5, 7.035]", "f = [10.5, 1e300]"), "mode[1].f"),
+    (BASE.replace('law = "linear"\nz = [0.0, 0.5]\nf = [10.5, 7.035]',
+                  'law = "constant"\nf = 1e300'), "mode[1].f"),
+    (BASE.replace("t_after = 0.5", "t_after = 0.5\nstep = 1e9"), "simulation.step"),
+    (BASE.replace("f = [10.5, 7.035]", "f = [10.5, 7.035]\nmass_ratio = 1e300"),
+     "mode[1].mass_ratio"),
+], ids=["gain", "f-linear", "f-constant", "step", "mass_ratio"])
+def test_absurd_values_are_refused(tmp_path, text, key):
+    _refused(_write(tmp_path, text), key)
+
+
+# ------------------------------------------------------------ 8. no temporary copy left
+
+def _tmp_dirs() -> set[Path]:
+    return set(Path(tempfile.gettempdir()).glob("djl-fmu-*"))
+
+
+def test_generator_fmu_never_leaves_its_copy(tmp_path, bad_fmus):
+    from harness.fmu.runner import GeneratorFMU
+
+    before = _tmp_dirs()
+    with GeneratorFMU() as g:
+        assert Path(g._tmp).is_dir()
+    assert _tmp_dirs() == before
+    with pytest.raises(ValueError):
+        GeneratorFMU(params={"profile": 2.9})  # the constructor raises after unzipping
+    with pytest.raises(KeyError):
+        GeneratorFMU(params={"no_such_variable": 1.0})
+    for fmu in bad_fmus.values():
+        with pytest.raises(ValueError):
+            GeneratorFMU(fmu)
+    assert _tmp_dirs() == before
+    g = GeneratorFMU()
+    tmp = Path(g._tmp)
+    assert tmp.is_dir()
+    del g
+    gc.collect()
+    assert not tmp.exists() and _tmp_dirs() == before
+
+
+def test_nan_metric_is_a_failure(tmp_path, capsys, monkeypatch):
+    import math
+
+    import harness.cosim
+
+    class Fake:
+        def rows(self):
+            return [{"scenario": "hostile", "profile": "DJL", "residual_m": math.nan,
+                     "settling_time_s": math.nan}]
+
+        def table(self):
+            return ""
+
+    monkeypatch.setattr(harness.cosim, "run_scenario", lambda *a, **k: Fake())
+    out = tmp_path / "out"
+    assert main(["simulate", str(_write(tmp_path, BASE)), "-o", str(out), "--no-plot"]) == 1
+    err = capsys.readouterr().err
+    assert "residual_m" in err and "DJL" in err and not out.exists()
