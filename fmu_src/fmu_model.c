@@ -334,6 +334,20 @@ model_status model_get(model_instance *m, unsigned int vr, char type, double *va
 {
     model_var v;
     model_data *d = &m->d;
+    /* Fast path of a master's per-step reads: the Real outputs of a planned instance (the
+     * same values the general path below returns, without the table lookup). */
+    if (type == 'R' && d->planned) {
+        switch (vr) {
+        case VR_X: *value = d->out.x; return ST_OK;
+        case VR_V: *value = d->out.v; return ST_OK;
+        case VR_A: *value = d->out.a; return ST_OK;
+        case VR_J: *value = d->out.j; return ST_OK;
+        case VR_X_AL: *value = d->out.x_al; return ST_OK;
+        case VR_V_AL: *value = d->out.v_al; return ST_OK;
+        case VR_A_AL: *value = d->out.a_al; return ST_OK;
+        default: break;
+        }
+    }
     if (!model_lookup(vr, 0, &v))
         return model_fail(m, "get: unknown value reference %u", vr);
     if (v.type != type)
