@@ -25,7 +25,8 @@ Examples
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Iterator
+import time
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from contextlib import contextmanager
 from typing import Any
@@ -278,3 +279,90 @@ def _probe(address: str, timeout: float) -> str:
     finally:
         pool.shutdown(wait=False)
     return str(info.get("type", "server")) if isinstance(info, dict) else "server"
+
+
+def run_batches(ex: Executor, task: Callable[..., Any], args: Sequence[Any],
+                items: Sequence[Any], batch: int, *, error: type[Exception],
+                passthrough: type[Exception],
+                progress: Any = None, on_serial_end: Callable[[], None] | None = None
+                ) -> tuple[list[Any], float]:
+    """Run ``task(*args, start, items[start:start + batch])`` for every batch on an executor.
+
+    The results come back in the order of the batches, whatever the executor
+    and the order of completion.
+
+    Parameters
+    ----------
+    ex : Executor
+        From :func:`make_executor` (a :class:`SerialExecutor` runs each batch as
+        it is submitted, so progress shows as it goes).
+    task : callable
+        A picklable top-level function; its result has a ``rows`` sequence
+        (for the progress bar).
+    args : sequence
+        Leading arguments of every call.
+    items : sequence
+        What the batches are cut from (e.g. the moves of a map).
+    batch : int
+        Items per task.
+    error : type of Exception
+        Raised for any failure, with a message that says what failed.
+    passthrough : type of Exception
+        A failure the task reports itself (its message is kept as it is).
+    progress : tqdm-like, optional
+        Updated with the number of rows of each result, closed at the end.
+    on_serial_end : callable, optional
+        Called at the end when ``ex`` is serial (e.g. to close a session that
+        the tasks kept in this process).
+
+    Returns
+    -------
+    results : list
+        One per batch, in batch order.
+    wall : float
+        Wall-clock time (s).
+    """
+    from concurrent.futures import as_completed
+    from concurrent.futures.process import BrokenProcessPool
+
+    starts = list(range(0, len(items), batch))
+    results: list[Any] = [None] * len(starts)
+    serial = isinstance(ex, SerialExecutor)
+
+    def collect(i: int, fut: Future) -> None:
+        try:
+            res = fut.result()
+        except passthrough as e:
+            raise error(str(e)) from None
+        except BrokenProcessPool as e:
+            raise error(f"a worker process died ({e})") from None
+        except Exception as e:  # noqa: BLE001 (remote failures arrive as any type)
+            hint = ""
+            if isinstance(e, ModuleNotFoundError) or "harness" in str(e):
+                hint = " (is this package installed on every Dask worker?)"
+            raise error(f"a batch of moves failed: {type(e).__name__}: {e}{hint}") from None
+        results[i] = res
+        if progress is not None:
+            progress.update(len(res.rows))
+
+    t0 = time.perf_counter()
+    futures: dict[Future, int] = {}
+    try:
+        for i, start in enumerate(starts):
+            fut = ex.submit(task, *args, start, items[start:start + batch])
+            if serial:
+                collect(i, fut)  # already done: report progress as it goes
+            else:
+                futures[fut] = i
+        for fut in as_completed(futures):
+            collect(futures[fut], fut)
+    except BaseException:
+        for f in futures:
+            f.cancel()
+        raise
+    finally:
+        if progress is not None:
+            progress.close()
+        if serial and on_serial_end is not None:
+            on_serial_end()
+    return results, time.perf_counter() - t0

@@ -45,7 +45,7 @@ import sys
 import threading
 import time
 from collections.abc import Iterator, Sequence
-from concurrent.futures import Executor, Future, as_completed
+from concurrent.futures import Executor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -582,63 +582,21 @@ def _where(ex: Executor, scheduler: str | None) -> str:
 
 def _run_on(sc: Scenario, kind: str, points: list[Point], total: int, bs: int, ex: Executor,
             n_workers: int, where: str, progress: bool) -> JerkTimeTable:
-    from concurrent.futures.process import BrokenProcessPool
+    from .executors import run_batches
 
-    from .executors import SerialExecutor
-
-    rows: list[dict[str, Any] | None] = [None] * len(points)
-    busy = 0.0
     bar = None
     if progress and len(points) > 1 and sys.stderr.isatty():
         from tqdm import tqdm
 
         bar = tqdm(total=len(points), desc=f"tune {sc.name}", unit="move", leave=False)
-    serial = isinstance(ex, SerialExecutor)
-
-    def collect(fut: Future) -> None:
-        nonlocal busy
-        try:
-            br: TuneBatch = fut.result()
-        except MoveTuneError as e:
-            raise TuneError(str(e)) from None
-        except BrokenProcessPool as e:
-            raise TuneError(f"a worker process died ({e})") from None
-        except Exception as e:  # noqa: BLE001 (remote failures arrive as any type)
-            hint = ""
-            if isinstance(e, ModuleNotFoundError) or "harness" in str(e):
-                hint = " (is this package installed on every Dask worker?)"
-            raise TuneError(f"a batch of moves failed: {type(e).__name__}: {e}{hint}"
-                            ) from None
-        rows[br.start:br.start + len(br.rows)] = br.rows
-        busy += br.busy_time
-        if bar is not None:
-            bar.update(len(br.rows))
-
-    t0 = time.perf_counter()
-    futures: list[Future] = []
-    try:
-        for start in range(0, len(points), bs):
-            fut = ex.submit(tune_batch, sc, start, points[start:start + bs])
-            if serial:
-                collect(fut)
-            else:
-                futures.append(fut)
-        for fut in as_completed(futures):
-            collect(fut)
-    except BaseException:
-        for f in futures:
-            f.cancel()
-        raise
-    finally:
-        if bar is not None:
-            bar.close()
-        if serial:
-            close_worker_session()
-    wall = time.perf_counter() - t0
-    done = [r for r in rows if r is not None]
-    assert len(done) == len(points)
-    return JerkTimeTable(done, _header(sc, kind, len(points), total), scenario=sc, kind=kind,
-                         wall_time=wall, busy_time=busy, workers=n_workers, executor=where)
+    batches, wall = run_batches(ex, tune_batch, (sc,), points, bs, error=TuneError,
+                                passthrough=MoveTuneError, progress=bar,
+                                on_serial_end=close_worker_session)
+    rows = [r for br in batches for r in br.rows]
+    assert len(rows) == len(points)
+    return JerkTimeTable(rows, _header(sc, kind, len(points), total), scenario=sc, kind=kind,
+                         wall_time=wall, busy_time=sum(br.busy_time for br in batches),
+                         workers=n_workers, executor=where)
 
 
 # --------------------------------------------------------------- the header

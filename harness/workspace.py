@@ -37,7 +37,7 @@ import sys
 import threading
 import time
 from collections.abc import Sequence
-from concurrent.futures import Executor, Future, as_completed
+from concurrent.futures import Executor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -331,63 +331,19 @@ def run_map(scenario: Scenario | str | Path, *, engine: str = "fast",
 
 def _run_on(sc: Scenario, engine: str, points: list[Point], bs: int, ex: Executor,
             n_workers: int, where: str, progress: bool) -> MapResult:
-    from concurrent.futures.process import BrokenProcessPool
+    from .executors import run_batches
 
-    from .executors import SerialExecutor
-
-    rows: list[list[dict[str, Any]] | None] = [None] * len(points)
-    keys: list[Any] = [None] * len(points)
-    busy, seen = 0.0, set()
-    bar = _progress_bar(len(points), progress, f"map {sc.name}")
-    serial = isinstance(ex, SerialExecutor)
-
-    def collect(fut: Future) -> None:
-        nonlocal busy
-        try:
-            br: BatchResult = fut.result()
-        except MoveError as e:
-            raise MapError(str(e)) from None
-        except BrokenProcessPool as e:
-            raise MapError(f"a worker process died ({e})") from None
-        except Exception as e:  # noqa: BLE001 (remote failures arrive as any type)
-            hint = ""
-            if isinstance(e, ModuleNotFoundError) or "harness" in str(e):
-                hint = " (is this package installed on every Dask worker?)"
-            raise MapError(f"a batch of moves failed: {type(e).__name__}: {e}{hint}"
-                           ) from None
-        rows[br.start:br.start + len(br.rows)] = br.rows
-        keys[br.start:br.start + len(br.keys)] = br.keys
-        busy += br.busy_time
-        seen.add(br.worker)
-        if bar is not None:
-            bar.update(len(br.rows))
-
-    t0 = time.perf_counter()
-    futures: list[Future] = []
-    try:
-        for start in range(0, len(points), bs):
-            fut = ex.submit(run_batch, sc, engine, start, points[start:start + bs])
-            if serial:
-                collect(fut)  # already done: report progress as it goes
-            else:
-                futures.append(fut)
-        for fut in as_completed(futures):
-            collect(fut)
-    except BaseException:
-        for f in futures:
-            f.cancel()
-        raise
-    finally:
-        if bar is not None:
-            bar.close()
-        if serial:
-            close_worker_session()
-    wall = time.perf_counter() - t0
-    assert all(r is not None for r in rows)
+    batches, wall = run_batches(
+        ex, run_batch, (sc, engine), points, bs, error=MapError, passthrough=MoveError,
+        progress=_progress_bar(len(points), progress, f"map {sc.name}"),
+        on_serial_end=close_worker_session)
+    rows = [r for br in batches for r in br.rows]
+    keys = [k for br in batches for k in br.keys]
+    busy = sum(br.busy_time for br in batches)
     _mark_duplicates(rows, keys)
-    return MapResult(sc, points, [r for r in rows if r is not None], engine=engine,
-                     workers=n_workers, wall_time=wall, busy_time=busy, batch=bs,
-                     executor=where, worker_ids=sorted(seen))
+    return MapResult(sc, points, rows, engine=engine, workers=n_workers, wall_time=wall,
+                     busy_time=busy, batch=bs, executor=where,
+                     worker_ids=sorted({br.worker for br in batches}))
 
 
 def _mark_duplicates(move_rows: list[Any], keys: list[Any]) -> None:
