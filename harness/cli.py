@@ -78,8 +78,13 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
+    from .commands._common import CommandError
+
     try:
         return int(args.func(args) or 0)
+    except CommandError as e:  # a command stops: its exit status, and why
+        print(f"djl-fmu {args.command}: {e}", file=sys.stderr)
+        return e.status
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130

@@ -146,6 +146,24 @@ def check_finite(name: str, result: Any) -> None:
                                       f": a non-finite result (nothing written)")
 
 
+def check_parallel_options(workers: int | None, scheduler: str | None,
+                           max_moves: int | None) -> None:
+    """Refuse bad ``--workers``, ``--max-moves``, or both ``--workers`` and ``--scheduler``.
+
+    Raises
+    ------
+    CommandError
+        With status 2.
+    """
+    if workers is not None and workers < 1:
+        raise CommandError(2, f"--workers must be >= 1, got {workers}")
+    if max_moves is not None and max_moves < 1:
+        raise CommandError(2, f"--max-moves must be >= 1, got {max_moves}")
+    if workers is not None and scheduler is not None:
+        raise CommandError(2, "give --workers or --scheduler, not both (on a Dask cluster "
+                              "the cluster's workers run the moves)")
+
+
 def check_stems(scenarios: Sequence[Any]) -> None:
     """Refuse two scenarios whose outputs would have the same file names."""
     stems = [safe_stem(s.name) for s in scenarios]

@@ -123,17 +123,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Check the inputs, run every comparison, then write the outputs; return the exit status."""
-    from ._common import CommandError
+    """Check the inputs, run every comparison, then write the outputs; return the exit status.
 
-    try:
-        return _run(args)
-    except CommandError as e:
-        print(f"djl-fmu compare: {e}", file=sys.stderr)
-        return e.status
-
-
-def _run(args: argparse.Namespace) -> int:
+    A :class:`~harness.commands._common.CommandError` it raises is reported by
+    :func:`harness.cli.main` (message and exit status).
+    """
     from ..peers.compare import ALL_PEERS, PEERS, stationary_variant
     from ..peers.ruckig_ref import ruckig_available
     from ._common import (

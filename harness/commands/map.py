@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from ._common import TUNING_HELP
@@ -94,23 +93,18 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Check the inputs, run the map, then write the outputs; return the exit status."""
-    from ._common import CommandError
+    """Check the inputs, run the map, then write the outputs; return the exit status.
 
-    try:
-        return _run(args)
-    except CommandError as e:
-        print(f"djl-fmu map: {e}", file=sys.stderr)
-        return e.status
-
-
-def _run(args: argparse.Namespace) -> int:
+    A :class:`~harness.commands._common.CommandError` it raises is reported by
+    :func:`harness.cli.main` (message and exit status).
+    """
     from ..executors import ExecutorError, make_executor
     from ..fmu.runner import FMUError
     from ..workspace import MapError, check_engine, run_map
     from ._common import (
         CommandError,
         apply_tuning,
+        check_parallel_options,
         load_scenarios,
         parse_tuning,
         report_written,
@@ -118,13 +112,7 @@ def _run(args: argparse.Namespace) -> int:
     )
 
     # 1. check everything before running anything
-    if args.workers is not None and args.workers < 1:
-        raise CommandError(2, f"--workers must be >= 1, got {args.workers}")
-    if args.max_moves is not None and args.max_moves < 1:
-        raise CommandError(2, f"--max-moves must be >= 1, got {args.max_moves}")
-    if args.workers is not None and args.scheduler is not None:
-        raise CommandError(2, "give --workers or --scheduler, not both (on a Dask cluster "
-                              "the cluster's workers run the moves)")
+    check_parallel_options(args.workers, args.scheduler, args.max_moves)
     (sc,), (stem,) = load_scenarios([args.scenario], None, None, args.out)
     (sc,) = apply_tuning([sc], parse_tuning(args.tuning), args.map_error)
     if sc.map is None:

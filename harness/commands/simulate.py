@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import functools
-import sys
 from pathlib import Path
 
 from ._common import TUNING_HELP
@@ -93,17 +92,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Check every scenario, run them, then write the outputs; return the exit status."""
-    from ._common import CommandError
+    """Check every scenario, run them, then write the outputs; return the exit status.
 
-    try:
-        return _run(args)
-    except CommandError as e:
-        print(f"djl-fmu simulate: {e}", file=sys.stderr)
-        return e.status
-
-
-def _run(args: argparse.Namespace) -> int:
+    A :class:`~harness.commands._common.CommandError` it raises is reported by
+    :func:`harness.cli.main` (message and exit status).
+    """
     from ..scenario import DEFAULT_SCENARIOS, embedded_scenarios
     from ._common import (
         CommandError,

@@ -102,44 +102,25 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Check the inputs, tune, then write the outputs; return the exit status."""
-    from ._common import CommandError
+    """Check the inputs, tune, then write the outputs; return the exit status.
 
-    try:
-        return _run(args)
-    except CommandError as e:
-        print(f"djl-fmu tune: {e}", file=sys.stderr)
-        return e.status
-
-
-def check_out(out: Path) -> None:
-    """Refuse an output folder that cannot be created or written, before anything runs.
-
-    Raises
-    ------
-    CommandError
-        Status 2: ``out`` (or the nearest existing folder above it) is a file,
-        or is not writable.
+    A :class:`~harness.commands._common.CommandError` it raises is reported by
+    :func:`harness.cli.main` (message and exit status).
     """
-    from ._common import check_out_dir
-
-    check_out_dir(out)
-
-
-def _run(args: argparse.Namespace) -> int:
     from ..executors import ExecutorError, make_executor
     from ..jerktimes import TuneError, parse_tuning, tune_table, with_methods
     from ..workspace import check_engine
-    from ._common import CommandError, load_scenarios, report_written, write_outputs
+    from ._common import (
+        CommandError,
+        check_out_dir,
+        check_parallel_options,
+        load_scenarios,
+        report_written,
+        write_outputs,
+    )
 
     # 1. check everything before running anything
-    if args.workers is not None and args.workers < 1:
-        raise CommandError(2, f"--workers must be >= 1, got {args.workers}")
-    if args.max_moves is not None and args.max_moves < 1:
-        raise CommandError(2, f"--max-moves must be >= 1, got {args.max_moves}")
-    if args.workers is not None and args.scheduler is not None:
-        raise CommandError(2, "give --workers or --scheduler, not both (on a Dask cluster "
-                              "the cluster's workers run the moves)")
+    check_parallel_options(args.workers, args.scheduler, args.max_moves)
     try:
         djl, jl = parse_tuning(args.tuning)
     except ValueError as e:
@@ -149,7 +130,7 @@ def _run(args: argparse.Namespace) -> int:
         raise CommandError(2, f"--map-error must be in [0, 1) (a relative error, e.g. 0.1), "
                               f"got {args.map_error:g}")
     (sc,), (stem,) = load_scenarios([args.scenario], None, None, args.out)
-    check_out(args.out)
+    check_out_dir(args.out)
     try:
         sc = with_methods(sc, djl, jl, args.map_error)
     except ValueError as e:
