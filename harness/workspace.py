@@ -84,19 +84,10 @@ _LOCAL = threading.local()
 
 
 def _make_session(engine: str, fmu: str | Path | None, fmi_version: int) -> Any:
-    """Create a :class:`~harness.cosim.Session` for ``engine``.
-
-    Falls back to ``Session(fmu, fmi_version)`` (the FMU engine) with a
-    ``Session`` that does not know the ``engine`` keyword.
-    """
+    """Create a :class:`~harness.cosim.Session` for ``engine``."""
     from .cosim import Session
 
-    try:
-        return Session(fmu, fmi_version, engine=engine)
-    except TypeError as e:
-        if "engine" not in str(e):
-            raise
-        return Session(fmu, fmi_version)
+    return Session(fmu, fmi_version, engine=engine)
 
 
 def _worker_session(engine: str, sc: Scenario) -> Any:
