@@ -11,28 +11,12 @@ import pytest
 
 from harness.cli import main
 
+from _scenarios import SMALL_AXIS
+
 SCENARIO = """\
 name = "cli-test"
 
-[simulation]
-t_after = 0.5
-
-[move]
-distance = 0.3
-v_max = 2.0
-a_max = 4.0
-
-[z]
-distance = 0.3
-a_max = 8.0
-v_max = 2.0
-
-[[mode]]
-zeta = 0.04
-law = "linear"
-z = [0.0, 0.5]
-f = [10.5, 7.035]
-"""
+""" + SMALL_AXIS
 
 
 def test_help_explains_inputs_outputs_and_defaults(capsys):

@@ -16,28 +16,12 @@ import pytest
 from harness.cli import main
 from harness.scenario import ScenarioError, load_scenario
 
+from _scenarios import SMALL_AXIS
+
 BASE = """\
 name = "hostile"
 
-[simulation]
-t_after = 0.5
-
-[move]
-distance = 0.3
-v_max = 2.0
-a_max = 4.0
-
-[z]
-distance = 0.3
-a_max = 8.0
-v_max = 2.0
-
-[[mode]]
-zeta = 0.04
-law = "linear"
-z = [0.0, 0.5]
-f = [10.5, 7.035]
-"""
+""" + SMALL_AXIS
 
 BIG = "1" + "0" * 400
 

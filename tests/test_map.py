@@ -17,6 +17,8 @@ import pytest
 from harness.cli import main
 from harness.scenario import ScenarioError, load_scenario, parse_scenario
 
+from _scenarios import SMALL_AXIS
+
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
@@ -39,25 +41,7 @@ ENGINE = _engine()
 SCENARIO = """\
 name = "map-test"
 
-[simulation]
-t_after = 0.5
-
-[move]
-distance = 0.3
-v_max = 2.0
-a_max = 4.0
-
-[z]
-distance = 0.3
-a_max = 8.0
-v_max = 2.0
-
-[[mode]]
-zeta = 0.04
-law = "linear"
-z = [0.0, 0.5]
-f = [10.5, 7.035]
-
+""" + SMALL_AXIS + """
 [map]
 z0 = [0.0, 0.1]
 z_distance = [0.15, 0.4]

@@ -33,6 +33,8 @@ from harness.jerktimes import (
 )
 from harness.scenario import load_scenario, parse_scenario
 
+from _scenarios import SMALL_AXIS
+
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
@@ -43,25 +45,7 @@ pytest.importorskip("harness._engine", reason="the tuning searches run on the co
 SCENARIO = """\
 name = "tune-test"
 
-[simulation]
-t_after = 0.5
-
-[move]
-distance = 0.3
-v_max = 2.0
-a_max = 4.0
-
-[z]
-distance = 0.3
-a_max = 8.0
-v_max = 2.0
-
-[[mode]]
-zeta = 0.04
-law = "linear"
-z = [0.0, 0.5]
-f = [10.5, 7.035]
-
+""" + SMALL_AXIS + """
 [map]
 z0 = [0.0, 0.1]
 z_distance = [0.2]
