@@ -4,7 +4,7 @@
 #define DJL_VARS_H
 
 #define DJL_MODEL_IDENTIFIER "JerkLimitedTrajectory"
-#define DJL_INSTANTIATION_TOKEN "{c24af257-4964-53ca-9d19-a9fc16c98e1a}"
+#define DJL_INSTANTIATION_TOKEN "{cd95a686-4d1f-546b-8318-1d4b92014959}"
 #define DJL_VARS_MAX_SEGMENTS 32
 
 /* value references (arrays: first element; element i at base + i) */

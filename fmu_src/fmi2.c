@@ -475,7 +475,7 @@ fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *
         model_fail(&st->m, "fmi2GetRealStatus: only fmi2LastSuccessfulTime is available");
         return fmi2Error;
     }
-    *value = st->m.d.start_time + (double)st->m.d.n * st->m.d.p.Te;
+    *value = st->m.d.t_now;
     return fmi2OK;
 }
 

@@ -778,7 +778,7 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     *eventHandlingNeeded = fmi3False;
     *terminateSimulation = fmi3False;
     *earlyReturn = fmi3False;
-    *lastSuccessfulTime = s->m.d.start_time + (double)s->m.d.n * s->m.d.p.Te;
+    *lastSuccessfulTime = s->m.d.t_now;
     return (fmi3Status)st;
 }
 

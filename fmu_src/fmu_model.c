@@ -209,7 +209,7 @@ static int32_t *int_param(model_data *d, unsigned int base)
 
 static void evaluate(model_data *d)
 {
-    double u = (double)d->n - d->offset;
+    double u = (double)d->n - d->offset + d->phase;
     djl_eval(&d->plan, u, &d->cursor, &d->out);
 }
 
@@ -263,11 +263,59 @@ static void log_plan(const model_instance *m)
     }
 }
 
+/* Unit in the last place of |x| (x finite): the spacing of doubles there. */
+static double ulp(double x)
+{
+    x = fabs(x);
+    return nextafter(x, HUGE_VAL) - x;
+}
+
+#ifndef DJL_MAX_POSITION
+#define DJL_MAX_POSITION 1e300
+#endif
+
+/* No output may overflow at any time the FMU can reach (n <= DJL_MAX_MOTION_SAMPLES):
+ * refuse, naming the parameters, a set whose time, or position before the start (at v0)
+ * or after the end (at the end velocity), would exceed DJL_MAX_POSITION.  During the
+ * motion the plan's own bounds hold (djl_validate). */
+static model_status check_range(model_instance *m, const char *fn, double off)
+{
+    const model_data *d = &m->d;
+    const djl_plan *pl = &d->plan;
+    double H = (double)DJL_MAX_MOTION_SAMPLES, Te = d->p.Te, before, after, x;
+    if (!(Te * H <= DJL_MAX_POSITION && fabs(d->start_time) + Te * H <= DJL_MAX_POSITION))
+        return model_fail(m, "%s: invalid parameter Te = %g s: the FMU's horizon of %g samples "
+                          "from the start time %g s would end beyond %g s", fn, Te, H,
+                          d->start_time, DJL_MAX_POSITION);
+    before = off > 0.0 ? off : 0.0; /* samples before the motion starts */
+    x = fabs(d->p.x0) + fabs(d->p.v0) * (before * Te);
+    if (!(x <= DJL_MAX_POSITION))
+        return model_fail(m, "%s: invalid parameters v0 = %g m/s with t_start = %g s (x0 = %g m): "
+                          "the position before the motion starts, x0 + v0 (t - t_start), would "
+                          "exceed %g m at the start time %g s", fn, d->p.v0, d->t_start, d->p.x0,
+                          DJL_MAX_POSITION, d->start_time);
+    after = H - off - (double)pl->k_end; /* samples the FMU may run after the motion */
+    x = fabs(pl->x_target) + (after > 0.0 ? fabs(pl->v_target) * (after * Te) : 0.0);
+    if (!(x <= DJL_MAX_POSITION)) {
+        char name[40];
+        if (d->p.n_segments == 0)
+            snprintf(name, sizeof name, "v_e");
+        else
+            snprintf(name, sizeof name, "seg_v_end[%d]", (int)d->p.n_segments);
+        return model_fail(m, "%s: invalid parameter %s = %g m/s: after the motion the position "
+                          "grows at %g m/s from %g m and would pass %g m within the FMU's horizon "
+                          "of %g samples of Te = %g s", fn, name, pl->v_target, pl->v_target,
+                          pl->x_target, DJL_MAX_POSITION, H, Te);
+    }
+    return ST_OK;
+}
+
 /* Plan for the current parameters if needed; on failure log and go to Error. */
 static model_status ensure_plan(model_instance *m, const char *fn)
 {
     djl_error err;
     djl_status st;
+    model_status st2;
     double off;
     model_data *d = &m->d;
     if (d->planned) return ST_OK;
@@ -283,7 +331,11 @@ static model_status ensure_plan(model_instance *m, const char *fn)
     if (!isfinite(off) || fabs(off) > 1e15)
         return model_fail(m, "%s: t_start = %g s is %g samples of Te = %g s away from the start "
                           "time %g s: too far", fn, d->t_start, off, d->p.Te, d->start_time);
-    if (fabs(off - floor(off + 0.5)) <= 1e-9 * (1.0 + fabs(off)))
+    /* on a sample to rounding: 1e-9 of the offset, or what t_start and the start time
+     * can resolve at their magnitude (2.4e-7 s at 1.7e9 s) */
+    if (fabs(off - floor(off + 0.5)) <=
+        fmax(1e-9 * (1.0 + fabs(off)), 4.0 * ulp(fmax(fabs(d->t_start), fabs(d->start_time))) /
+                                           d->p.Te))
         off = floor(off + 0.5);
     else {
         off = ceil(off);
@@ -292,6 +344,7 @@ static model_status ensure_plan(model_instance *m, const char *fn)
                   "Te = %.17g s): the motion starts at the next sample, %.17g s", d->t_start,
                   d->start_time, d->p.Te, d->start_time + off * d->p.Te);
     }
+    if ((st2 = check_range(m, fn, off)) != ST_OK) return st2;
     d->offset = off;
     d->cursor = 0;
     d->planned = 1;
@@ -354,7 +407,7 @@ model_status model_get(model_instance *m, unsigned int vr, char type, double *va
         return model_fail(m, "get: %s (value reference %u) is a %s, not a %s", v.name, vr,
                           type_name(v.type), type_name(type));
     if (v.causality == 't') {
-        *value = d->start_time + (double)d->n * d->p.Te;
+        *value = d->t_now;
         return ST_OK;
     }
     if (v.causality == 'p') {
@@ -401,6 +454,7 @@ model_status model_setup(model_instance *m, double start_time)
     if (!isfinite(start_time))
         return model_fail(m, "start time %g s: must be finite", start_time);
     m->d.start_time = start_time;
+    m->d.t_now = start_time;
     m->d.planned = 0;
     return ST_OK;
 }
@@ -419,24 +473,53 @@ model_status model_exit_init(model_instance *m)
     return ST_OK;
 }
 
+/* Tolerance between a communication point and the FMU's own time: the rounding a master
+ * may make computing it (t += h, or start + i h: a few units in the last place), or a
+ * millionth of a sample, whichever is larger.  Anything beyond is a visible fraction of
+ * a step, whatever the start time. */
+static double time_tolerance(const model_data *d, double t)
+{
+    return fmax(1e-6 * d->p.Te, 4.0 * ulp(fmax(fabs(t), fabs(d->t_now))));
+}
+
 model_status model_do_step(model_instance *m, double t, double h)
 {
     model_data *d = &m->d;
-    double now = d->start_time + (double)d->n * d->p.Te, r, k;
+    double r, k, phase, whole, t_end;
+    int64_t n;
     if (!(isfinite(h) && h > 0.0))
         return model_fail(m, "DoStep: communication step %g s: must be a finite number > 0", h);
-    if (!(fabs(t - now) <= 1e-6 * d->p.Te + 1e-12 * fabs(now)))
+    if (!(isfinite(t) && fabs(t - d->t_now) <= time_tolerance(d, t)))
         return model_fail(m, "DoStep: currentCommunicationPoint = %.17g s, but the FMU is at "
-                          "%.17g s: a step must start where the previous one ended", t, now);
+                          "%.17g s: a step must start where the previous one ended", t, d->t_now);
+    t_end = t + h;
+    if (!isfinite(t_end))
+        return model_fail(m, "DoStep: %.17g s + a step of %g s is not a finite time", t, h);
+    /* The profile's time advances by h exactly: in whole samples when h is one (to a
+     * millionth of a sample, as always), else by whole samples plus a phase. */
     r = h / d->p.Te;
     k = floor(r + 0.5);
-    if (k < 1.0 || fabs(r - k) > 1e-6 + 1e-12 * k)
-        return model_fail(m, "DoStep: communication step %.17g s is %.17g sampling periods of "
-                          "Te = %.17g s: it must be a whole multiple of Te (the generator "
-                          "produces one sample per Te)", h, r, d->p.Te);
-    if (k > 1e15 || (double)d->n + k > 1e15)
-        return model_fail(m, "DoStep: communication step %g s takes the FMU past 1e15 samples", h);
-    d->n += (int64_t)k;
+    if (k >= 1.0 && fabs(r - k) <= 1e-6 + 1e-12 * k) {
+        whole = k;
+        phase = d->phase;
+    } else {
+        double f = d->phase + (r - floor(r));
+        whole = floor(r) + floor(f);
+        phase = f - floor(f);
+        if (phase >= 1.0 - 1e-9) { /* rounding of fractions that add up to a sample */
+            whole += 1.0;
+            phase = 0.0;
+        } else if (phase <= 1e-9) {
+            phase = 0.0;
+        }
+    }
+    if (!(whole + (double)d->n + phase <= (double)DJL_MAX_MOTION_SAMPLES))
+        return model_fail(m, "DoStep: communication step %g s takes the FMU past %g samples of "
+                          "Te = %g s", h, (double)DJL_MAX_MOTION_SAMPLES, d->p.Te);
+    n = d->n + (int64_t)whole;
+    d->n = n;
+    d->phase = phase;
+    d->t_now = t_end;
     evaluate(d);
     return ST_OK;
 }
@@ -501,6 +584,8 @@ static const char *state_flaw(const model_data *d, char *why, size_t nwhy)
     if (d->planned != 0 && d->planned != 1) return "the planned flag is neither 0 nor 1";
     if (!isfinite(d->start_time)) return "the start time is not finite";
     if (d->n < 0 || d->n > DJL_MAX_MOTION_SAMPLES) return "the sample counter is out of range";
+    if (!(d->phase >= 0.0 && d->phase < 1.0)) return "the phase is not in [0, 1)";
+    if (!isfinite(d->t_now)) return "the communication time is not finite";
     if ((d->state & (MS_STEP | MS_TERMINATED)) && !d->planned)
         return "a state after initialization without a plan";
     if (!d->planned) return NULL; /* the plan is rebuilt before any use */
@@ -533,7 +618,7 @@ static const char *state_flaw(const model_data *d, char *why, size_t nwhy)
     }
     /* the outputs are those of the plan at the current sample */
     cur = d->cursor;
-    djl_eval(pl, (double)d->n - d->offset, &cur, &o);
+    djl_eval(pl, (double)d->n - d->offset + d->phase, &cur, &o);
     if (cur != d->cursor || memcmp(&o, &d->out, sizeof o) != 0)
         return "its outputs are not those of its plan at its time";
     return NULL;

@@ -33,7 +33,7 @@ typedef enum {
 typedef enum { ST_OK = 0, ST_WARNING = 1, ST_DISCARD = 2, ST_ERROR = 3, ST_FATAL = 4 } model_status;
 
 #define MODEL_MAGIC 0x4a4c4446u /* "FDLJ" */
-#define MODEL_LAYOUT 2u
+#define MODEL_LAYOUT 3u
 
 typedef struct {
     uint32_t magic;
@@ -45,7 +45,9 @@ typedef struct {
     djl_params p;
     double t_start;         /* s */
     double start_time;      /* s, FMU start time */
-    int64_t n;              /* whole samples of Te since start_time */
+    int64_t n;              /* whole samples of Te since start_time: the profile's time is */
+    double phase;           /* n + phase samples after start_time, phase in [0, 1) */
+    double t_now;           /* s, the communication point reached (the master's clock) */
     double offset;          /* (t_start - start_time)/Te, made integral when within 1e-9 */
     int32_t planned;        /* plan matches the parameters */
     int32_t cursor;

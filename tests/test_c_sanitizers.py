@@ -25,6 +25,9 @@ PROGRAMS = {
     # recomputed); the full campaign of issue #10 is `test_fmi2 1000000`
     "test_fmi2": (["test_fmi2.c"], ["fmi2.c", "fmu_model.c", "djl_core.c"], ["100000", "10000"]),
     "test_fmi3": (["test_fmi3.c"], ["fmi3.c", "fmu_model.c", "djl_core.c"], []),
+    # communication points and steps (issue #10 items 1-2); the 10^8-step masters run
+    # at -O2 in test_time_masters_run_to_the_end
+    "test_time": (["test_time.c"], ["fmi2.c", "fmu_model.c", "djl_core.c"], ["200000"]),
 }
 
 
@@ -75,3 +78,19 @@ def test_under_valgrind_memcheck(name, tmp_path):
                            "--errors-for-leak-kinds=definite,indirect", "-q", str(exe), *args],
                           capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_time_masters_run_to_the_end(tmp_path):
+    """Masters adding h 10^8 times (h = 1 ms and 0.1 ms, from 0 and 1.7e9 s) run to the end.
+
+    Built at -O2 without sanitizers (about 15 s): each master's whole-sample points equal
+    a reference stepped by Te bit for bit, a point off by 5 % of a step is refused at
+    every start time, and fractional steps give the profile's values (tests/c/test_time.c).
+    """
+    if shutil.which("gcc") is None:
+        pytest.skip("gcc not available")
+    exe = _compile("test_time", tmp_path, ["-O2"])
+    proc = subprocess.run([str(exe), "100000000", "1000000"], capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "100000000 steps per master" in proc.stdout and "0 failures" in proc.stdout

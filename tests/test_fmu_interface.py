@@ -100,6 +100,36 @@ def test_bad_parameter_is_an_fmi_error_naming_it(fmu, params, fragments):
     _expect_init_error(fmu, params, *fragments)
 
 
+OVERFLOWING = [
+    # issue #10: accepted before, with +-inf outputs
+    ({"x0": 1.797e308, "distance": 1e305}, ["x0 = 1.797e+308"]),
+    ({"x0": 1e300, "distance": 1e299}, ["distance = 1e+299", "1e+300 m"]),
+    ({"v_max": 1e300, "v0": 1e300, "v_e": 1e300, "distance": 1e299, "t_start": 1e9},
+     ["v0 = 1e+300", "t_start = 1e+09", "before the motion starts"]),
+    ({"v_max": 1e300, "v0": 1e300, "v_e": 1e300, "distance": 1e299},
+     ["v_e = 1e+300", "after the motion"]),
+    ({"n_segments": 3, "v_max": 1e290, "seg_distance": [4e299, 4e299, 4e299],
+      "seg_v_end": [0.0, 0.0, 0.0]},
+     ["seg_distance[3]"]),
+]
+
+
+@pytest.mark.parametrize("params, fragments", OVERFLOWING)
+def test_parameters_whose_outputs_would_overflow_are_refused(fmu, params, fragments):
+    """No infinity in any output: such sets are refused at initialisation, by name."""
+    _expect_init_error(fmu, params, *fragments)
+
+
+def test_large_but_finite_motions_are_accepted(fmu):
+    """The bounds refuse only what overflows: a 1 km/s start 1e9 s ahead is fine."""
+    p = {"v_max": 1e3, "v0": 1e3, "v_e": 1e3, "t_start": 1e9, "distance": 1e3}
+    with GeneratorFMU(fmu, params=p) as g:
+        g.initialize()
+        assert g.get("x") == pytest.approx(-1e12)
+        g.do_step(1e9 + 2.0)
+        assert math.isfinite(g.get("x")) and g.get("v") == pytest.approx(1e3)
+
+
 def test_non_zero_end_speed_refusal_says_from_where_every_distance_lands(fmu):
     """The refusal gives the minimum and the distance from which all land; check both."""
     p = {"profile": 2, "T_F1": 0.03, "v0": 0.9, "v_e": 1.0, "v_max": 1.0, "distance": 0.05774}
@@ -116,25 +146,77 @@ def test_non_zero_end_speed_refusal_says_from_where_every_distance_lands(fmu):
         check_end_and_limits(generate({**p, "distance": float(d)}, fmu=fmu))
 
 
-def test_step_not_a_multiple_of_Te(fmu):
-    with GeneratorFMU(fmu) as g:
-        g.initialize()
-        g.do_step(2e-3)
-        with pytest.raises(FMUError) as info:
-            g.do_step(1.5e-3)
-        assert "whole multiple of Te" in str(info.value)
-        assert "0.0015" in str(info.value)
-        assert math.isfinite(g.get("x"))
-    _healthy_afterwards(fmu)
+def _backward_taylor(ref_t, ref, t):
+    """Profile values at ``t`` from the next whole sample backwards (independent of the FMU's
+    forward evaluation): the jerk of the interval is the finite difference of ``a``."""
+    Te = ref_t[1] - ref_t[0]
+    k = np.floor((t - ref_t[0]) / Te + 1e-9).astype(int)
+    sig = ref_t[k + 1] - t
+    j = (ref["a"][k + 1] - ref["a"][k]) / Te
+    a = ref["a"][k + 1] - j * sig
+    v = ref["v"][k + 1] - ref["a"][k + 1] * sig + 0.5 * j * sig**2
+    x = ref["x"][k + 1] - ref["v"][k + 1] * sig + 0.5 * ref["a"][k + 1] * sig**2 - j * sig**3 / 6
+    return x, v, a, j
 
 
-@pytest.mark.parametrize("h", [0.0, -1e-3, math.nan, 0.4e-3])
-def test_step_size_not_positive_or_below_Te(fmu, h):
-    with GeneratorFMU(fmu) as g:
+@pytest.mark.parametrize("kwargs, Te", [
+    ({"stop_time": 1.2345}, 1e-3),              # stop time not a whole number of samples
+    ({"output_interval": 0.0025}, 1e-3),        # 2.5 samples a step
+    ({"output_interval": 0.001}, 2e-3),         # Te = 2 ms with the default 1 ms step
+    ({"output_interval": 0.37e-3, "stop_time": 1.3}, 1e-3),
+])
+def test_any_communication_step_gives_the_profile_at_that_time(fmu, kwargs, Te):
+    """fmpy's own loop with steps that are not whole samples: every point on the profile."""
+    from fmpy import simulate_fmu
+
+    params = {"Te": Te, "t_start": 0.1}
+    names = ["x", "v", "a", "j", "a_AL"]
+    res = simulate_fmu(str(fmu), start_values=params, output=names, **{"stop_time": 1.5, **kwargs})
+    stop = kwargs.get("stop_time", 1.5)
+    assert res["time"][-1] == pytest.approx(stop, abs=1e-12)
+    ref = simulate_fmu(str(fmu), start_values=params, output=names, output_interval=Te,
+                       stop_time=stop + 2 * Te)
+    x, v, a, j = _backward_taylor(ref["time"], ref, res["time"])
+    assert np.max(np.abs(res["x"] - x)) < 1e-12
+    assert np.max(np.abs(res["v"] - v)) < 1e-9
+    assert np.max(np.abs(res["a"] - a)) < 1e-6
+    on_grid = np.abs(res["time"] / Te - np.round(res["time"] / Te)) < 1e-6
+    between = ~on_grid
+    # j and a_al are those of the interval that holds the point (a whole sample: the next one)
+    assert np.allclose(res["j"][between], j[between], rtol=1e-6, atol=1e-6)
+    k = np.floor(res["time"] / Te + 1e-9).astype(int)
+    assert np.array_equal(res["a_AL"], ref["a_AL"][k])
+    # on whole samples the values are the per-sample values, bit for bit
+    kk = np.round(res["time"][on_grid] / Te).astype(int)
+    for n in names:
+        assert np.array_equal(res[n][on_grid], ref[n][kk]), n
+    check_end_and_limits(generate({"t_start": 0.1, "Te": Te}, fmu=fmu))
+
+
+def test_whole_multiple_steps_are_bit_identical(fmu):
+    """A step of 3 Te gives every third per-sample value exactly (today's values)."""
+    with GeneratorFMU(fmu) as g1, GeneratorFMU(fmu) as g3:
+        g1.initialize()
+        g3.initialize()
+        _, one = g1.record(1200, 1e-3, ["x", "v", "a", "j", "x_AL", "v_AL", "a_AL"])
+        _, three = g3.record(400, 3e-3, ["x", "v", "a", "j", "x_AL", "v_AL", "a_AL"])
+    for n in one:
+        assert np.array_equal(one[n][::3], three[n]), n
+
+
+def test_fractional_steps_then_whole_steps(fmu):
+    """Steps of Te/3 add up to whole samples: afterwards the values are the samples again."""
+    with GeneratorFMU(fmu) as g, GeneratorFMU(fmu) as ref:
         g.initialize()
-        with pytest.raises(FMUError):
-            g.do_step(h)
-    _healthy_afterwards(fmu)
+        ref.initialize()
+        for _ in range(300):
+            g.do_step(1e-3 / 3)
+        ref.do_step(0.1)
+        for name in ("x", "v", "a", "j"):
+            assert g.get(name) == ref.get(name), name
+        g.do_step(0.2)
+        ref.do_step(0.2)
+        assert g.get("x") == ref.get("x")
 
 
 def test_step_from_the_wrong_time(fmu):

@@ -46,7 +46,10 @@ def test_model_description_declares_capabilities(fmus, version):
     assert cs.canHandleVariableCommunicationStepSize
     assert cs.canGetAndSetFMUstate and cs.canSerializeFMUstate
     if version == 3:
-        assert float(cs.fixedInternalStepSize) == pytest.approx(spec.DEFAULT_TE)
+        # Te is a parameter and any step is exact: no fixed internal step is declared, and
+        # fmpy's default communication step comes from the DefaultExperiment
+        assert cs.fixedInternalStepSize is None
+        assert float(md.defaultExperiment.stepSize) == pytest.approx(spec.DEFAULT_TE)
     assert md.guid == spec.INSTANTIATION_TOKEN
     declared = {getattr(c, "name", c) for c in md.logCategories}
     assert declared == {c for c, _ in spec.LOG_CATEGORIES}

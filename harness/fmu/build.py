@@ -167,8 +167,10 @@ def _documentation(fmi_version: int) -> str:
 <body>
 <h1>{spec.MODEL_NAME} (FMI {fmi_version}.0, co-simulation)</h1>
 <p>{codegen.DESCRIPTION}</p>
-<p>The communication step must be a whole multiple of <code>Te</code>. Outputs are the exact
-samples of the planned profile, whose jerk is constant on every sampling interval.</p>
+<p>Any communication step h &gt; 0 is accepted. Outputs at a communication point are the exact
+values of the planned profile at that time (x, v, a of the piecewise cubic; j and a_al of the
+sampling interval of <code>Te</code> that contains it); a step that is a whole multiple of
+<code>Te</code> gives the samples themselves.</p>
 <table border="1" cellpadding="3">
 <tr><th>name</th><th>causality</th><th>type</th><th>unit</th><th>start</th><th>meaning</th></tr>
 {rows}

@@ -222,7 +222,6 @@ def fmi3_model_description() -> str:
         + _attrs(
             modelIdentifier=spec.MODEL_IDENTIFIER,
             canHandleVariableCommunicationStepSize="true",
-            fixedInternalStepSize=repr(spec.DEFAULT_TE),
             canGetAndSetFMUState="true",
             canSerializeFMUState="true",
             hasEventMode="false",

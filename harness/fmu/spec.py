@@ -24,7 +24,8 @@ MAX_SEGMENTS = 32
 """Capacity of the segment arrays (``DJL_MAX_SEGMENTS`` in ``djl_core.h``)."""
 
 DEFAULT_TE = 1e-3
-"""Start value of ``Te``; also FMI 3 ``fixedInternalStepSize``."""
+"""Start value of ``Te``.  FMI 3's ``fixedInternalStepSize`` is not declared: ``Te`` is a
+parameter, and the FMU gives exact values at any communication step."""
 
 LOG_CATEGORIES: tuple[tuple[str, str], ...] = (
     ("logEvents", "Planning decisions: stage lengths, reached limits, fallbacks"),
@@ -88,8 +89,9 @@ VARIABLES: tuple[Variable, ...] = (
     # --- parameters (issue #2 contract) ---------------------------------------
     _p("profile", 1, "Integer", 3, "Profile: 1 = AL (acceleration-limited), 2 = JL (jerk-limited, "
        "one jerk time T_F1), 3 = DJL (dissociated jerk-limited, jerk times T_F1..T_F4)"),
-    _p("Te", 2, "Real", DEFAULT_TE, "Sampling period of the generator; the communication step "
-       "must be a whole multiple of it", "s", c_name="TE"),
+    _p("Te", 2, "Real", DEFAULT_TE, "Sampling period of the generator (any communication step "
+       "is accepted: outputs are the profile's exact values at the communication point)", "s",
+       c_name="TE"),
     _p("t_start", 3, "Real", 0.0, "Time at which the motion starts (at the first sample of the "
        "generator, FMU start time + k Te, at or after it)", "s"),
     _p("x0", 4, "Real", 0.0, "Start position", "m"),
@@ -106,7 +108,7 @@ VARIABLES: tuple[Variable, ...] = (
     _o("x", 13, "Real", "Reference position", "m", variability="continuous"),
     _o("v", 14, "Real", "Reference velocity", "m/s", variability="continuous"),
     _o("a", 15, "Real", "Reference acceleration", "m/s2", variability="continuous"),
-    _o("j", 16, "Real", "Reference jerk over the sample interval that starts now (0 for AL)",
+    _o("j", 16, "Real", "Reference jerk over the sample interval that contains now (0 for AL)",
        "m/s3"),
     _o("done", 17, "Boolean", "True once the motion, filters included, has ended"),
     # --- extensions -----------------------------------------------------------
@@ -123,7 +125,7 @@ VARIABLES: tuple[Variable, ...] = (
     _o("v_AL", 31, "Real", "Acceleration-limited profile before the FIR filters: velocity", "m/s",
        variability="continuous"),
     _o("a_AL", 32, "Real", "Acceleration-limited profile before the FIR filters: acceleration "
-       "over the sample interval that starts now", "m/s2"),
+       "over the sample interval that contains now", "m/s2"),
     _o("segment", 33, "Integer", "1-based segment of the AL profile now; 0 before t_start"),
     _c("motion_time", 40, "Real", "Duration of the motion, filters included (ends at "
        "t_start + motion_time)", "s"),

@@ -121,7 +121,11 @@ static void run_bad_inputs(void)
     c = make("bad_step", 1);
     fmi3EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3False, 0.0);
     fmi3ExitInitializationMode(c);
-    expect_error(fmi3DoStep(c, 0.0, 2.5e-3, fmi3True, &eh, &term, &early, &last), "whole multiple");
+    CHECK(fmi3DoStep(c, 0.0, 2.5e-3, fmi3True, &eh, &term, &early, &last) == fmi3OK,
+          "a step of 2.5 Te");
+    CHECK(last == 2.5e-3, "lastSuccessfulTime %.17g", last);
+    expect_error(fmi3DoStep(c, 2.5e-3 + 1e-4, 1e-3, fmi3True, &eh, &term, &early, &last),
+                 "must start where");
     fmi3FreeInstance(c);
     /* no logger at all: errors must still be reported by status, without crashing */
     c = make("no_logger", 0);
