@@ -383,6 +383,27 @@ model_status model_set(model_instance *m, unsigned int vr, char type, double val
     return ST_OK;
 }
 
+int model_get_reals_fast(const model_instance *m, int mask, const unsigned int *vr, size_t n,
+                         double *value)
+{
+    const model_data *d = &m->d;
+    size_t i;
+    if (!d->planned || !(d->state & mask)) return 0;
+    for (i = 0; i < n; i++) {
+        switch (vr[i]) {
+        case VR_X: value[i] = d->out.x; break;
+        case VR_V: value[i] = d->out.v; break;
+        case VR_A: value[i] = d->out.a; break;
+        case VR_J: value[i] = d->out.j; break;
+        case VR_X_AL: value[i] = d->out.x_al; break;
+        case VR_V_AL: value[i] = d->out.v_al; break;
+        case VR_A_AL: value[i] = d->out.a_al; break;
+        default: return 0;
+        }
+    }
+    return 1;
+}
+
 model_status model_get(model_instance *m, unsigned int vr, char type, double *value)
 {
     model_var v;
@@ -489,7 +510,7 @@ model_status model_do_step(model_instance *m, double t, double h)
     int64_t n;
     if (!(isfinite(h) && h > 0.0))
         return model_fail(m, "DoStep: communication step %g s: must be a finite number > 0", h);
-    if (!(isfinite(t) && fabs(t - d->t_now) <= time_tolerance(d, t)))
+    if (t != d->t_now && !(isfinite(t) && fabs(t - d->t_now) <= time_tolerance(d, t)))
         return model_fail(m, "DoStep: currentCommunicationPoint = %.17g s, but the FMU is at "
                           "%.17g s: a step must start where the previous one ended", t, d->t_now);
     t_end = t + h;
@@ -497,11 +518,15 @@ model_status model_do_step(model_instance *m, double t, double h)
         return model_fail(m, "DoStep: %.17g s + a step of %g s is not a finite time", t, h);
     /* The profile's time advances by h exactly: in whole samples when h is one (to a
      * millionth of a sample, as always), else by whole samples plus a phase. */
-    r = h / d->p.Te;
-    k = floor(r + 0.5);
-    if (k >= 1.0 && fabs(r - k) <= 1e-6 + 1e-12 * k) {
+    if (h == m->step_h && d->p.Te == m->step_Te) { /* the same step as last time */
+        whole = m->step_whole;
+        phase = d->phase;
+    } else if (r = h / d->p.Te, k = floor(r + 0.5), k >= 1.0 && fabs(r - k) <= 1e-6 + 1e-12 * k) {
         whole = k;
         phase = d->phase;
+        m->step_h = h; /* remembered: a master's next step is usually the same */
+        m->step_Te = d->p.Te;
+        m->step_whole = k;
     } else {
         double f = d->phase + (r - floor(r));
         whole = floor(r) + floor(f);

@@ -67,6 +67,9 @@ typedef struct {
     void *logger_env;
     int logging_on;
     int category_on[DJL_LOG_N];
+    /* the last whole-sample step size seen by DoStep and its count of samples (a cache:
+     * derived from h and Te alone, so not part of an FMU state) */
+    double step_h, step_Te, step_whole;
 } model_instance;
 
 /* Initialise an instance (default parameters, state Instantiated). */
@@ -85,6 +88,8 @@ void model_log(const model_instance *m, model_status status, int category, const
 /* The call is allowed in the current state (mask of model_state), else log and
  * return 0.  An error moves the instance to MS_ERROR. */
 int model_allowed(model_instance *m, const char *fn, int mask);
+/* The same test, inline for the calls of every step. */
+#define MODEL_ALLOWED(m, fn, mask) (((m)->d.state & (mask)) != 0 || model_allowed((m), (fn), (mask)))
 model_status model_fail(model_instance *m, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 2, 3)))
@@ -118,6 +123,13 @@ typedef struct {
 /* Look a value reference up; fmi3 = 1 accepts only declared (array base)
  * references.  Returns 0 if unknown. */
 int model_lookup(unsigned int vr, int fmi3, model_var *out);
+
+/* The per-step reads of a master, in one call: when the instance is planned, its state is
+ * in mask and every reference is a Real output of the profile (x, v, a, j, x_AL, v_AL,
+ * a_AL), write the n values and return 1; otherwise return 0 (nothing logged: the caller
+ * takes the general path, which gives the same values or the error). */
+int model_get_reals_fast(const model_instance *m, int mask, const unsigned int *vr, size_t n,
+                         double *value);
 
 model_status model_set(model_instance *m, unsigned int vr, char type, double value);
 model_status model_get(model_instance *m, unsigned int vr, char type, double *value);
