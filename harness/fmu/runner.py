@@ -421,7 +421,7 @@ class GeneratorFMU:
         return motion_start(float(self.get("t_start")), self.start_time, float(self.get("Te")))
 
     def do_step(self, h: float) -> None:
-        """Advance the FMU by ``h`` seconds (a whole multiple of ``Te``)."""
+        """Advance the FMU by ``h`` > 0 seconds (any step: the profile's values then)."""
         self._call(self.fmu.doStep, currentCommunicationPoint=self.time, communicationStepSize=h)
         self.time += h
 
@@ -434,7 +434,7 @@ class GeneratorFMU:
         n : int
             Number of communication steps.
         h : float
-            Communication step (a whole multiple of ``Te``).
+            Communication step (s), any value > 0.
         reals : sequence of str
             Real outputs to record.
         flags : sequence of str
@@ -688,7 +688,7 @@ def generate(
     t_stop : float, optional
         End time; by default ten communication steps after the end of the motion.
     dt : float, optional
-        Communication step (a whole multiple of ``Te``); default ``Te``.
+        Communication step (s), any value > 0; default ``Te``.
     fmi_version : {2, 3}
         FMU to use when ``fmu`` is not given.
     fmu : path-like, optional
