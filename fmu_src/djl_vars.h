@@ -4,7 +4,7 @@
 #define DJL_VARS_H
 
 #define DJL_MODEL_IDENTIFIER "JerkLimitedTrajectory"
-#define DJL_INSTANTIATION_TOKEN "{cd95a686-4d1f-546b-8318-1d4b92014959}"
+#define DJL_INSTANTIATION_TOKEN "{419b19bb-fb9f-5005-996d-259d94590f08}"
 #define DJL_VARS_MAX_SEGMENTS 32
 
 /* value references (arrays: first element; element i at base + i) */
@@ -59,7 +59,8 @@ typedef enum {
 /* Variable table: FMI 2 element value reference = vr + index (arrays). */
 typedef struct {
     unsigned int vr;
-    char type;      /* 'R' Real/Float64, 'I' Integer/Int32, 'B' Boolean */
+    char type;      /* 'R' Real/Float64, 'I' Integer/Int32, 'B' Boolean,
+                       'E' Enumeration (stored as an integer; FMI 3: Int64) */
     char causality; /* 'p' parameter, 'c' calculatedParameter, 'o' output, 't' time */
     unsigned short size;
     const char *name;
@@ -67,7 +68,7 @@ typedef struct {
 
 static const djl_var_info djl_var_table[] = {
     {0u, 'R', 't', 1, "time"},
-    {1u, 'I', 'p', 1, "profile"},
+    {1u, 'E', 'p', 1, "profile"},
     {2u, 'R', 'p', 1, "Te"},
     {3u, 'R', 'p', 1, "t_start"},
     {4u, 'R', 'p', 1, "x0"},
@@ -86,7 +87,7 @@ static const djl_var_info djl_var_table[] = {
     {17u, 'B', 'o', 1, "done"},
     {20u, 'R', 'p', 1, "v0"},
     {21u, 'R', 'p', 1, "v_e"},
-    {22u, 'I', 'p', 1, "short_stage"},
+    {22u, 'E', 'p', 1, "short_stage"},
     {23u, 'I', 'p', 1, "n_segments"},
     {30u, 'R', 'o', 1, "x_AL"},
     {31u, 'R', 'o', 1, "v_AL"},

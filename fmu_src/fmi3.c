@@ -200,6 +200,8 @@ typedef struct {
     double *r_out;
     int32_t *i_out;
     fmi3Boolean *b_out;
+    const int64_t *l_in; /* Int64: Enumeration variables only */
+    int64_t *l_out;
 } io3;
 
 static fmi3Status access(fmi3Instance instance, const char *fn, int set, char type,
@@ -208,10 +210,15 @@ static fmi3Status access(fmi3Instance instance, const char *fn, int set, char ty
     inst3 *s = INST(instance);
     size_t k, j = 0;
     unsigned int e;
-    const void *values = set ? (io.r_in ? (const void *)io.r_in : io.i_in ? (const void *)io.i_in
-                                                                          : (const void *)io.b_in)
-                             : (io.r_out ? (void *)io.r_out : io.i_out ? (void *)io.i_out
-                                                                       : (void *)io.b_out);
+    const void *values = set ? (io.r_in   ? (const void *)io.r_in
+                                : io.i_in ? (const void *)io.i_in
+                                : io.l_in ? (const void *)io.l_in
+                                          : (const void *)io.b_in)
+                             : (io.r_out   ? (void *)io.r_out
+                                : io.i_out ? (void *)io.i_out
+                                : io.l_out ? (void *)io.l_out
+                                           : (void *)io.b_out);
+    int int64 = io.l_in || io.l_out;
     CHECK(instance, fn, set ? MASK_SET : MASK_GET);
     if (nvr > 0 && !vr) return (fmi3Status)model_null_arg(&s->m, fn, "valueReferences");
     if ((nvr > 0 || nValues > 0) && !values)
@@ -221,6 +228,11 @@ static fmi3Status access(fmi3Instance instance, const char *fn, int set, char ty
         model_var v;
         if (!model_lookup(vr[k], 1, &v)) {
             model_fail(&s->m, "%s: unknown value reference %u", fn, vr[k]);
+            return fmi3Error;
+        }
+        if (int64 && !v.enumeration) {
+            model_fail(&s->m, "%s: %s (value reference %u) is not an Enumeration (the only "
+                       "variables accessed as Int64)", fn, v.name, vr[k]);
             return fmi3Error;
         }
         j += v.size;
@@ -237,12 +249,21 @@ static fmi3Status access(fmi3Instance instance, const char *fn, int set, char ty
         for (e = 0; e < v.size; e++, j++) {
             double x = 0.0;
             if (set) {
-                x = io.r_in ? io.r_in[j] : io.i_in ? (double)io.i_in[j] : (io.b_in[j] ? 1.0 : 0.0);
+                if (io.l_in && (io.l_in[j] < INT32_MIN || io.l_in[j] > INT32_MAX)) {
+                    model_refuse(&s->m, "%s: %s = %lld is out of the range of the enumeration "
+                                 "(nothing more was set)", fn, v.name, (long long)io.l_in[j]);
+                    return fmi3Error;
+                }
+                x = io.r_in   ? io.r_in[j]
+                    : io.i_in ? (double)io.i_in[j]
+                    : io.l_in ? (double)io.l_in[j]
+                              : (io.b_in[j] ? 1.0 : 0.0);
                 if (model_set(&s->m, v.base + e, type, x) != ST_OK) return fmi3Error;
             } else {
                 if (model_get(&s->m, v.base + e, type, &x) != ST_OK) return fmi3Error;
                 if (io.r_out) io.r_out[j] = x;
                 if (io.i_out) io.i_out[j] = (int32_t)x;
+                if (io.l_out) io.l_out[j] = (int64_t)x;
                 if (io.b_out) io.b_out[j] = x != 0.0;
             }
         }
@@ -253,7 +274,7 @@ static fmi3Status access(fmi3Instance instance, const char *fn, int set, char ty
 fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                           size_t nValueReferences, fmi3Float64 values[], size_t nValues)
 {
-    io3 io = {NULL, NULL, NULL, NULL, NULL, NULL};
+    io3 io = {NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL};
     if (instance && valueReferences && values && nValues == nValueReferences &&
         model_get_reals_fast(&INST(instance)->m, MASK_GET, valueReferences, nValueReferences,
                              values))
@@ -265,7 +286,7 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
 fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                         size_t nValueReferences, fmi3Int32 values[], size_t nValues)
 {
-    io3 io = {NULL, NULL, NULL, NULL, NULL, NULL};
+    io3 io = {NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL};
     io.i_out = values;
     return access(instance, "fmi3GetInt32", 0, 'I', valueReferences, nValueReferences, io, nValues);
 }
@@ -273,7 +294,7 @@ fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference valueRef
 fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                           size_t nValueReferences, fmi3Boolean values[], size_t nValues)
 {
-    io3 io = {NULL, NULL, NULL, NULL, NULL, NULL};
+    io3 io = {NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL};
     io.b_out = values;
     return access(instance, "fmi3GetBoolean", 0, 'B', valueReferences, nValueReferences, io, nValues);
 }
@@ -281,7 +302,7 @@ fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference valueR
 fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                           size_t nValueReferences, const fmi3Float64 values[], size_t nValues)
 {
-    io3 io = {NULL, NULL, NULL, NULL, NULL, NULL};
+    io3 io = {NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL};
     io.r_in = values;
     return access(instance, "fmi3SetFloat64", 1, 'R', valueReferences, nValueReferences, io, nValues);
 }
@@ -289,7 +310,7 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
 fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                         size_t nValueReferences, const fmi3Int32 values[], size_t nValues)
 {
-    io3 io = {NULL, NULL, NULL, NULL, NULL, NULL};
+    io3 io = {NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL};
     io.i_in = values;
     return access(instance, "fmi3SetInt32", 1, 'I', valueReferences, nValueReferences, io, nValues);
 }
@@ -297,9 +318,27 @@ fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference valueRef
 fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                           size_t nValueReferences, const fmi3Boolean values[], size_t nValues)
 {
-    io3 io = {NULL, NULL, NULL, NULL, NULL, NULL};
+    io3 io = {NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL};
     io.b_in = values;
     return access(instance, "fmi3SetBoolean", 1, 'B', valueReferences, nValueReferences, io, nValues);
+}
+
+/* Enumerations (profile, short_stage) are Int64 in FMI 3's API; Int32 is accepted too, as
+ * before the variables were declared as enumerations. */
+fmi3Status fmi3GetInt64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
+                        size_t nValueReferences, fmi3Int64 values[], size_t nValues)
+{
+    io3 io = {NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL};
+    io.l_out = values;
+    return access(instance, "fmi3GetInt64", 0, 'I', valueReferences, nValueReferences, io, nValues);
+}
+
+fmi3Status fmi3SetInt64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
+                        size_t nValueReferences, const fmi3Int64 values[], size_t nValues)
+{
+    io3 io = {NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL};
+    io.l_in = values;
+    return access(instance, "fmi3SetInt64", 1, 'I', valueReferences, nValueReferences, io, nValues);
 }
 
 /* Types this FMU does not use: any value reference is unknown. */
@@ -338,7 +377,6 @@ NO_SUCH_GET(UInt8, fmi3UInt8)
 NO_SUCH_GET(Int16, fmi3Int16)
 NO_SUCH_GET(UInt16, fmi3UInt16)
 NO_SUCH_GET(UInt32, fmi3UInt32)
-NO_SUCH_GET(Int64, fmi3Int64)
 NO_SUCH_GET(UInt64, fmi3UInt64)
 NO_SUCH_GET(String, fmi3String)
 NO_SUCH_SET(Float32, fmi3Float32)
@@ -347,7 +385,6 @@ NO_SUCH_SET(UInt8, fmi3UInt8)
 NO_SUCH_SET(Int16, fmi3Int16)
 NO_SUCH_SET(UInt16, fmi3UInt16)
 NO_SUCH_SET(UInt32, fmi3UInt32)
-NO_SUCH_SET(Int64, fmi3Int64)
 NO_SUCH_SET(UInt64, fmi3UInt64)
 NO_SUCH_SET(String, fmi3String)
 

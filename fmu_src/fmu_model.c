@@ -160,7 +160,8 @@ int model_lookup(unsigned int vr, int fmi3, model_var *out)
         if (vr >= v->vr && vr < v->vr + span) {
             out->base = v->vr;
             out->index = vr - v->vr;
-            out->type = v->type;
+            out->type = v->type == 'E' ? 'I' : v->type;
+            out->enumeration = v->type == 'E';
             out->causality = v->causality;
             out->size = v->size;
             out->name = v->name;
@@ -377,6 +378,9 @@ model_status model_set(model_instance *m, unsigned int vr, char type, double val
     } else if (type == 'I') {
         int32_t *p = int_param(d, v.base);
         if (!p) return model_fail(m, "set: internal error, no storage for %s", v.name);
+        if (!(value >= -2147483648.0 && value <= 2147483647.0))
+            return model_refuse(m, "set: %s = %.17g is out of the range of a 32-bit integer "
+                                "(nothing was changed)", v.name, value);
         *p = (int32_t)value;
     }
     d->planned = 0;

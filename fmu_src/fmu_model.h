@@ -116,7 +116,8 @@ model_status model_set_debug_logging(model_instance *m, const char *fn, int logg
 typedef struct {
     unsigned int base;  /* value reference of the variable (array base) */
     unsigned int index; /* element */
-    char type, causality;
+    char type, causality; /* type 'R', 'I' or 'B' (an Enumeration is an 'I') */
+    char enumeration;     /* 1: an Enumeration variable (FMI 3 accesses it as Int64) */
     unsigned short size;
     const char *name;
 } model_var;

@@ -70,7 +70,55 @@ def test_model_description_declares_capabilities(fmus, version):
         if unit:
             assert v.unit == unit, name
     assert by["done"].type == "Boolean"
-    assert by["profile"].type == ("Integer" if version == 2 else "Int32")
+    # issue #11: enumerations, declared types with quantities and display units, bounds
+    assert by["profile"].type == by["short_stage"].type == "Enumeration"
+    items = {t.name: [(i.name, int(i.value)) for i in t.items]
+             for t in md.typeDefinitions if t.type == "Enumeration"}
+    assert items == {"Profile": [("AL", 1), ("JL", 2), ("DJL", 3)],
+                     "ShortStage": [("stretch", 1), ("overlap", 2)]}
+    assert by["profile"].declaredType.name == "Profile"
+    display = {u.name: {d.name: d.factor for d in u.displayUnits} for u in md.unitDefinitions}
+    quantity = {"m": ("Position", "mm"), "m/s": ("Velocity", "mm/s"),
+                "m/s2": ("Acceleration", "mm/s2"), "m/s3": ("Jerk", "mm/s3"),
+                "s": ("Time", "ms")}
+    for v in md.modelVariables:
+        if v.type in ("Real", "Float64") and v.causality != "independent":
+            q, disp = quantity[v.unit]
+            assert v.declaredType is not None and v.declaredType.quantity == q, v.name
+            assert v.declaredType.displayUnit == disp, v.name
+            assert float(display[v.unit][disp]) == 1000.0
+    bounds = {"profile": (1, 3), "short_stage": (1, 2), "n_segments": (0, spec.MAX_SEGMENTS),
+              "Te": (0.0, spec.MAX_TE), "x0": (-spec.MAX_POSITION, spec.MAX_POSITION),
+              "distance": (-spec.MAX_POSITION, spec.MAX_POSITION)}
+    for name, (lo, hi) in bounds.items():
+        assert float(by[name].min) == lo and float(by[name].max) == hi, name
+    for name in ("v_max", "a_max", "d_max", "T_F1", "T_F2", "T_F3", "T_F4"):
+        assert float(by[name].min) == 0.0, name
+    # every parameter's start lies within its declared bounds
+    for v in md.modelVariables:
+        if v.causality == "parameter" and v.start is not None and v.type != "Boolean":
+            for x in str(v.start).split():
+                assert v.min is None or float(v.min) <= float(x), v.name
+                assert v.max is None or float(x) <= float(v.max), v.name
+    # ModelStructure: every output, no dependency (no inputs, no states)
+    outs = md.outputs
+    assert {u.variable.name for u in outs} == {v.name for v in md.modelVariables
+                                               if v.causality == "output"}
+    assert all(u.dependencies == [] for u in outs)
+    assert {u.variable.name for u in md.initialUnknowns} >= {"motion_time", "N_F1", "x"}
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_display_units_and_enumerations_through_fmpy(fmus, version):
+    """A user sets a distance in mm and a profile by its enumeration value, as tools do."""
+    from fmpy import simulate_fmu
+
+    res = simulate_fmu(str(fmus[version]), stop_time=1.2,
+                       start_values={"distance": (250.0, "mm"), "v_max": (800.0, "mm/s"),
+                                     "profile": 2, "T_F1": (40.0, "ms")},
+                       output=["x", "v"])
+    assert res["x"][-1] == pytest.approx(0.25, rel=1e-9)
+    assert max(res["v"]) <= 0.8 * (1 + 1e-12)
 
 
 @pytest.mark.parametrize("version", [2, 3])

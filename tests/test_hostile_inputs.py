@@ -83,15 +83,23 @@ def test_generate_rejects_wrong_types(params, name, exc, version):
         generate(params, fmi_version=version)
 
 
-def test_set_rejects_float_for_integer_and_accepts_whole_float():
+@pytest.mark.parametrize("version", [2, 3])
+def test_set_rejects_any_float_for_an_integer(version):
+    """Strict types: 2.9 and 2.0 alike are refused for an Integer or Enumeration variable,
+    naming it, and nothing is set; an int (or numpy integer) is taken."""
+    import numpy as np
+
     from harness.fmu.runner import GeneratorFMU
 
-    with GeneratorFMU() as g:
-        with pytest.raises(ValueError, match="profile"):
-            g.set({"profile": 2.9})
-        g.set({"profile": 2.0, "distance": 0.1})
+    with GeneratorFMU(fmi_version=version) as g:
+        for bad in ({"profile": 2.9}, {"profile": 2.0}, {"short_stage": 1.0},
+                    {"n_segments": np.float64(0.0)}):
+            with pytest.raises(TypeError, match=next(iter(bad))):
+                g.set({"distance": 0.3, **bad})
+            assert g.get("distance") == pytest.approx(0.4)  # nothing was set
+        g.set({"profile": np.int64(2), "short_stage": 2, "distance": 0.1})
         g.initialize()
-        assert g.get("profile") == 2
+        assert g.get("profile") == 2 and g.get("short_stage") == 2
 
 
 # ------------------------------------------------------------ 3. bad FMU files

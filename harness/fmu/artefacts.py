@@ -1,5 +1,7 @@
-"""Artefacts of a reference FMU beside its binaries: licence, icon, documentation, reference
-result (issue #11, item 4).  Filled in by :func:`write_artefacts`."""
+"""Artefacts of a reference FMU beside its binaries (issue #11, item 4).
+
+Licence, icon, documentation and reference result, written by :func:`write_artefacts`.
+"""
 
 from __future__ import annotations
 

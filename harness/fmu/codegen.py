@@ -34,9 +34,32 @@ DEFAULT_STOP_TIME = 1.0
 def _fmt(value: float | int | bool, typ: str) -> str:
     if typ == "Boolean":
         return "true" if value else "false"
-    if typ == "Integer":
+    if typ in ("Integer", "Enumeration"):
         return str(int(value))
     return repr(float(value))
+
+
+def _units(x: list[str]) -> None:
+    """<UnitDefinitions>, the same in FMI 2 and 3: base units and the display units."""
+    x.append("  <UnitDefinitions>")
+    for unit, base in spec.UNITS.items():
+        x.append(f"    <Unit{_attrs(name=unit)}>")
+        x.append(f"      <BaseUnit{_attrs(**base)}/>")
+        if unit in spec.DISPLAY_UNITS:
+            name, factor = spec.DISPLAY_UNITS[unit]
+            x.append(f"      <DisplayUnit{_attrs(name=name, factor=repr(factor))}/>")
+        x.append("    </Unit>")
+    x.append("  </UnitDefinitions>")
+
+
+def _bounds(v: Variable) -> dict[str, object]:
+    """``min`` / ``max`` attributes of a variable."""
+    out: dict[str, object] = {}
+    if v.min is not None:
+        out["min"] = _fmt(v.min, v.type)
+    if v.max is not None:
+        out["max"] = _fmt(v.max, v.type)
+    return out
 
 
 def _attrs(**kw: object) -> str:
@@ -72,7 +95,8 @@ def c_header() -> str:
         "/* Variable table: FMI 2 element value reference = vr + index (arrays). */",
         "typedef struct {",
         "    unsigned int vr;",
-        "    char type;      /* 'R' Real/Float64, 'I' Integer/Int32, 'B' Boolean */",
+        "    char type;      /* 'R' Real/Float64, 'I' Integer/Int32, 'B' Boolean,",
+        "                       'E' Enumeration (stored as an integer; FMI 3: Int64) */",
         "    char causality; /* 'p' parameter, 'c' calculatedParameter, 'o' output, 't' time */",
         "    unsigned short size;",
         "    const char *name;",
@@ -80,7 +104,7 @@ def c_header() -> str:
         "",
         "static const djl_var_info djl_var_table[] = {",
     ]
-    ctype = {"Real": "R", "Integer": "I", "Boolean": "B"}
+    ctype = {"Real": "R", "Integer": "I", "Boolean": "B", "Enumeration": "E"}
     ccaus = {"parameter": "p", "calculatedParameter": "c", "output": "o", "independent": "t"}
     for v in VARIABLES:
         lines.append(
@@ -140,12 +164,21 @@ def fmi2_model_description() -> str:
         x.append(f"      <File{_attrs(name=f)}/>")
     x.append("    </SourceFiles>")
     x.append("  </CoSimulation>")
-    x.append("  <UnitDefinitions>")
-    for unit, base in spec.UNITS.items():
-        x.append(f"    <Unit{_attrs(name=unit)}>")
-        x.append(f"      <BaseUnit{_attrs(**base)}/>")
-        x.append("    </Unit>")
-    x.append("  </UnitDefinitions>")
+    _units(x)
+    x.append("  <TypeDefinitions>")
+    for q, unit in spec.QUANTITIES.items():
+        x.append(f"    <SimpleType{_attrs(name=q)}>")
+        disp = spec.DISPLAY_UNITS[unit][0]
+        x.append(f"      <Real{_attrs(quantity=q, unit=unit, displayUnit=disp)}/>")
+        x.append("    </SimpleType>")
+    for name, items in spec.ENUMERATIONS.items():
+        x.append(f"    <SimpleType{_attrs(name=name)}>")
+        x.append("      <Enumeration>")
+        for item, value, desc in items:
+            x.append(f"        <Item{_attrs(name=item, value=value, description=desc)}/>")
+        x.append("      </Enumeration>")
+        x.append("    </SimpleType>")
+    x.append("  </TypeDefinitions>")
     x.append("  <LogCategories>")
     for name, desc in spec.LOG_CATEGORIES:
         x.append(f"    <Category{_attrs(name=name, description=desc)}/>")
@@ -171,8 +204,13 @@ def fmi2_model_description() -> str:
             + ">"
         )
         type_attrs: dict[str, object] = {}
+        if v.quantity:
+            type_attrs["declaredType"] = v.quantity
+        if v.declared_type:
+            type_attrs["declaredType"] = v.declared_type
         if v.type == "Real" and v.unit:
             type_attrs["unit"] = v.unit
+        type_attrs.update(_bounds(v))
         if v.start is not None and v.initial != "calculated":
             type_attrs["start"] = _fmt(v.start, v.type)
         x.append(f"      <{v.type}{_attrs(**type_attrs)}/>")
@@ -180,16 +218,17 @@ def fmi2_model_description() -> str:
     x.append("  </ModelVariables>")
     x.append("  <ModelStructure>")
     x.append("    <Outputs>")
+    # no inputs, no states: every output depends on parameters and time only
     for name, _, v in entries:
         if v.causality == "output":
-            x.append(f"      <Unknown{_attrs(index=index[name])}/>")
+            x.append(f"      <Unknown{_attrs(index=index[name], dependencies='')}/>")
     x.append("    </Outputs>")
     x.append("    <InitialUnknowns>")
     for name, _, v in entries:
         if (v.causality == "output" and v.initial in ("approx", "calculated")) or (
             v.causality == "calculatedParameter"
         ):
-            x.append(f"      <Unknown{_attrs(index=index[name])}/>")
+            x.append(f"      <Unknown{_attrs(index=index[name], dependencies='')}/>")
     x.append("    </InitialUnknowns>")
     x.append("  </ModelStructure>")
     x.append("</fmiModelDescription>")
@@ -198,7 +237,8 @@ def fmi2_model_description() -> str:
 
 # --------------------------------------------------------------------------- FMI 3
 
-_FMI3_TYPE = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean"}
+_FMI3_TYPE = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean",
+              "Enumeration": "Enumeration"}
 
 
 def fmi3_model_description() -> str:
@@ -230,12 +270,17 @@ def fmi3_model_description() -> str:
         )
         + "/>"
     )
-    x.append("  <UnitDefinitions>")
-    for unit, base in spec.UNITS.items():
-        x.append(f"    <Unit{_attrs(name=unit)}>")
-        x.append(f"      <BaseUnit{_attrs(**base)}/>")
-        x.append("    </Unit>")
-    x.append("  </UnitDefinitions>")
+    _units(x)
+    x.append("  <TypeDefinitions>")
+    for q, unit in spec.QUANTITIES.items():
+        x.append(f"    <Float64Type{_attrs(name=q, quantity=q, unit=unit)}"
+                 f"{_attrs(displayUnit=spec.DISPLAY_UNITS[unit][0])}/>")
+    for name, items in spec.ENUMERATIONS.items():
+        x.append(f"    <EnumerationType{_attrs(name=name)}>")
+        for item, value, desc in items:
+            x.append(f"      <Item{_attrs(name=item, value=value, description=desc)}/>")
+        x.append("    </EnumerationType>")
+    x.append("  </TypeDefinitions>")
     x.append("  <LogCategories>")
     for name, desc in spec.LOG_CATEGORIES:
         x.append(f"    <Category{_attrs(name=name, description=desc)}/>")
@@ -255,10 +300,15 @@ def fmi3_model_description() -> str:
             causality=v.causality,
             variability=v.variability,
         )
+        if v.quantity:
+            attrs["declaredType"] = v.quantity
+        if v.declared_type:
+            attrs["declaredType"] = v.declared_type
         if v.causality not in ("parameter", "independent"):
             attrs["initial"] = v.initial
         if v.type == "Real" and v.unit:
             attrs["unit"] = v.unit
+        attrs.update(_bounds(v))
         if v.start is not None and v.initial != "calculated":
             attrs["start"] = " ".join([_fmt(v.start, v.type)] * v.size)
         if v.size > 1:
@@ -269,14 +319,15 @@ def fmi3_model_description() -> str:
             x.append(f"    <{typ}{_attrs(**attrs)}/>")
     x.append("  </ModelVariables>")
     x.append("  <ModelStructure>")
+    # no inputs, no states: every output depends on parameters and time only
     for v in VARIABLES:
         if v.causality == "output":
-            x.append(f"    <Output{_attrs(valueReference=v.vr)}/>")
+            x.append(f"    <Output{_attrs(valueReference=v.vr, dependencies='')}/>")
     for v in VARIABLES:
         if (v.causality == "output" and v.initial in ("approx", "calculated")) or (
             v.causality == "calculatedParameter"
         ):
-            x.append(f"    <InitialUnknown{_attrs(valueReference=v.vr)}/>")
+            x.append(f"    <InitialUnknown{_attrs(valueReference=v.vr, dependencies='')}/>")
     x.append("  </ModelStructure>")
     x.append("</fmiModelDescription>")
     return "\n".join(x) + "\n"
@@ -301,16 +352,29 @@ def fmi3_build_description() -> str:
 
 def readme_table() -> str:
     """Markdown table of the FMU variables (pasted in README.md; a test checks it)."""
-    rows = ["| name | causality / variability | type (FMI 2 / FMI 3) | unit | start | meaning |",
-            "|---|---|---|---|---|---|"]
-    types = {"Real": "Real / Float64", "Integer": "Integer / Int32", "Boolean": "Boolean"}
+    rows = ["| name | causality / variability | type (FMI 2 / FMI 3) | unit (display) | start | "
+            "range | meaning |",
+            "|---|---|---|---|---|---|---|"]
+    types = {"Real": "Real / Float64", "Integer": "Integer / Int32", "Boolean": "Boolean",
+             "Enumeration": "Enumeration (Integer / Int64)"}
     for v in VARIABLES:
         if v.causality == "independent":
             continue
         name = f"`{v.name}`" + (f"[1..{v.size}]" if v.size > 1 else "")
         start = "" if v.start is None else _fmt(v.start, v.type)
+        unit = v.unit or "–"
+        if v.quantity:
+            unit += f" ({spec.DISPLAY_UNITS[v.unit or ''][0]})"
+        lo = "" if v.min is None else f"{_fmt(v.min, v.type).replace('.0', '')}"
+        hi = "" if v.max is None else f"{_fmt(v.max, v.type).replace('.0', '')}"
+        rng = f"[{lo}, {hi}]" if lo and hi else f"≥ {lo}" if lo else f"≤ {hi}" if hi else ""
+        if v.min_exclusive:
+            rng = f"({lo}, {hi}]" if hi else f"> {lo}"
+        if v.declared_type:
+            rng = ", ".join(f"{value} = {item}" for item, value, _ in
+                            spec.ENUMERATIONS[v.declared_type])
         rows.append(f"| {name} | {v.causality} / {v.variability} | {types[v.type]} | "
-                    f"{v.unit or '–'} | {start} | {v.description} |")
+                    f"{unit} | {start} | {rng} | {v.description} |")
     return "\n".join(rows) + "\n"
 
 

@@ -309,17 +309,17 @@ class GeneratorFMU:
         """Set parameters by name (before :meth:`initialize`).
 
         Values are checked against the variable's type before anything is set:
-        an Integer/Int32 variable (``profile``, ``short_stage``, ``n_segments``)
-        takes an integer (a float only when it is a whole number: 2.9 is
-        refused, not truncated), a Real/Float64 a number, a Boolean a bool;
-        a bool is never taken for a number.
+        an Integer/Int32 or Enumeration variable (``profile``, ``short_stage``, ``n_segments``)
+        takes an int (a float, even 2.0, is refused: never truncated or taken
+        for an integer), a Real/Float64 a number, a Boolean a bool; a bool is
+        never taken for a number.
 
         Raises
         ------
         TypeError
             A value of the wrong type (the message names the variable).
         ValueError
-            A non-whole float for an integer, or an integer out of the Int32 range.
+            An integer out of the Int32 range.
         KeyError
             An unknown variable.
         """
@@ -339,13 +339,16 @@ class GeneratorFMU:
                     vals = (vals + [0.0] * len(els))[: len(els)]
                 vrs, typ = [e.valueReference for e in els], els[0].type
             kind = {"Float64": "Real", "Real": "Real", "Int32": "Integer",
-                    "Integer": "Integer", "Boolean": "Boolean"}.get(typ)
+                    "Integer": "Integer", "Boolean": "Boolean",
+                    "Enumeration": "Integer"}.get(typ)
             if kind is None:
                 raise TypeError(f"{name}: unsupported type {typ}")
-            todo.append((kind, vrs, [_convert(name, kind, x) for x in vals]))
-        for kind, vrs, vals in todo:
+            todo.append((kind, typ, vrs, [_convert(name, kind, x) for x in vals]))
+        for kind, typ, vrs, vals in todo:
             if self.fmi_version == 3:
-                fn = {"Real": self.fmu.setFloat64, "Integer": self.fmu.setInt32,
+                # FMI 3 accesses an Enumeration as Int64
+                fn = {"Real": self.fmu.setFloat64,
+                      "Integer": self.fmu.setInt64 if typ == "Enumeration" else self.fmu.setInt32,
                       "Boolean": self.fmu.setBoolean}[kind]
             else:
                 fn = {"Real": self.fmu.setReal, "Integer": self.fmu.setInteger,
@@ -362,6 +365,8 @@ class GeneratorFMU:
                 vals = self._call(self.fmu.getFloat64, vr, n)
             elif var.type == "Int32":
                 vals = self._call(self.fmu.getInt32, vr, n)
+            elif var.type == "Enumeration":
+                vals = self._call(self.fmu.getInt64, vr, n)
             else:
                 vals = self._call(self.fmu.getBoolean, vr, n)
             return np.array(vals) if var.dimensions else vals[0]
@@ -369,7 +374,7 @@ class GeneratorFMU:
         vrs = [e.valueReference for e in els]
         typ = els[0].type
         get = (self.fmu.getReal if typ == "Real" else
-               self.fmu.getInteger if typ == "Integer" else self.fmu.getBoolean)
+               self.fmu.getInteger if typ in ("Integer", "Enumeration") else self.fmu.getBoolean)
         vals = self._call(get, vrs)
         return np.array(vals) if len(els) > 1 else vals[0]
 
@@ -566,13 +571,9 @@ def _convert(name: str, kind: str, x: Any) -> Any:
     if kind == "Integer":
         if isinstance(x, (int, np.integer)):
             v = int(x)
-        elif isinstance(x, (float, np.floating)):
-            if not (math.isfinite(x) and float(x).is_integer()):
-                raise ValueError(f"{name}: an Integer variable takes a whole number, got {x!r} "
-                                 f"(not rounded or truncated)")
-            v = int(x)
-        else:
-            raise TypeError(f"{name}: an Integer variable takes an int, got {x!r}")
+        else:  # a float, even 2.0, is refused: strict types (issue #10)
+            raise TypeError(f"{name}: an Integer variable takes an int, got {x!r} (a float is "
+                            f"not rounded, truncated or taken for an integer)")
         if not _INT32[0] <= v <= _INT32[1]:
             raise ValueError(f"{name}: {v} is outside the 32-bit integer range")
         return v

@@ -35,7 +35,7 @@ LOG_CATEGORIES: tuple[tuple[str, str], ...] = (
 
 Causality = Literal["parameter", "calculatedParameter", "output", "local", "independent"]
 Variability = Literal["fixed", "tunable", "discrete", "continuous"]
-VarType = Literal["Real", "Integer", "Boolean"]
+VarType = Literal["Real", "Integer", "Boolean", "Enumeration"]
 
 UNITS: dict[str, dict[str, int]] = {
     "s": {"s": 1},
@@ -44,6 +44,53 @@ UNITS: dict[str, dict[str, int]] = {
     "m/s2": {"m": 1, "s": -2},
     "m/s3": {"m": 1, "s": -3},
 }
+
+DISPLAY_UNITS: dict[str, tuple[str, float]] = {
+    "s": ("ms", 1000.0),
+    "m": ("mm", 1000.0),
+    "m/s": ("mm/s", 1000.0),
+    "m/s2": ("mm/s2", 1000.0),
+    "m/s3": ("mm/s3", 1000.0),
+}
+"""Display unit of each unit (a machine-tool user thinks in mm): name and factor
+(display value = factor x value)."""
+
+QUANTITIES: dict[str, str] = {
+    "Time": "s",
+    "Position": "m",
+    "Velocity": "m/s",
+    "Acceleration": "m/s2",
+    "Jerk": "m/s3",
+}
+"""Declared Real types: name (also its ``quantity``) and unit; every Real variable with a
+unit gets the type of its unit (but the independent variable ``time``)."""
+
+QUANTITY_OF_UNIT = {unit: q for q, unit in QUANTITIES.items()}
+
+ENUMERATIONS: dict[str, tuple[tuple[str, int, str], ...]] = {
+    "Profile": (
+        ("AL", 1, "acceleration-limited"),
+        ("JL", 2, "jerk-limited, one jerk time T_F1"),
+        ("DJL", 3, "dissociated jerk-limited, jerk times T_F1..T_F4"),
+    ),
+    "ShortStage": (
+        ("stretch", 1, "lengthen a short stage so that every constant-jerk stage lasts its "
+                       "jerk time"),
+        ("overlap", 2, "let the two ramps of a short stage overlap, as in the paper"),
+    ),
+}
+"""Enumeration types: items (name, value, description).  FMI 2 sets them with
+``fmi2SetInteger``, FMI 3 with ``fmi3SetInt64`` (the FMU also takes ``fmi3SetInt32``)."""
+
+MAX_POSITION = 1e300
+"""Largest |position| a motion may reach (``DJL_MAX_POSITION``): the bound of ``x0`` and
+``distance``."""
+
+MAX_TE = 1e285
+"""Largest ``Te``: the FMU's horizon of 1e15 samples stays below 1e300 s."""
+
+MAX_FILTER_SAMPLES = 100000000
+"""Longest jerk time in samples (``DJL_MAX_FILTER_SAMPLES``)."""
 
 
 @dataclass(frozen=True)
@@ -64,6 +111,22 @@ class Variable:
     value references, FMI 3 one array variable."""
     c_name: str = field(default="")
     """Enumerator stem in ``djl_vars.h`` (defaults to the upper-cased name)."""
+    min: float | int | None = None
+    """Declared minimum (inclusive, as FMI's ``min``)."""
+    max: float | int | None = None
+    """Declared maximum (inclusive)."""
+    min_exclusive: bool = False
+    """The minimum itself is refused (``> min``): FMI's ``min`` is inclusive, so the model
+    description declares ``min`` and the description says "> min"."""
+    declared_type: str | None = None
+    """Enumeration type of an Enumeration variable (a key of :data:`ENUMERATIONS`)."""
+
+    @property
+    def quantity(self) -> str | None:
+        """Declared Real type (and ``quantity``) of the variable, from its unit."""
+        if self.type != "Real" or self.causality == "independent":
+            return None
+        return QUANTITY_OF_UNIT.get(self.unit or "")
 
     @property
     def enum(self) -> str:
@@ -71,39 +134,52 @@ class Variable:
         return "VR_" + (self.c_name or self.name.upper())
 
 
-def _p(name, vr, typ, start, desc, unit=None, size=1, c_name=""):
-    return Variable(name, vr, typ, "parameter", "fixed", desc, unit, start, "exact", size, c_name)
+def _p(name, vr, typ, start, desc, unit=None, size=1, c_name="", min=None, max=None,
+       declared_type=None, positive=False):
+    if positive:
+        min = 0.0
+    return Variable(name, vr, typ, "parameter", "fixed", desc, unit, start, "exact", size, c_name,
+                    min, max, positive, declared_type)
 
 
-def _o(name, vr, typ, desc, unit=None, c_name="", variability="discrete"):
-    return Variable(name, vr, typ, "output", variability, desc, unit, None, "calculated", 1, c_name)
+def _o(name, vr, typ, desc, unit=None, c_name="", variability="discrete", min=None, max=None):
+    return Variable(name, vr, typ, "output", variability, desc, unit, None, "calculated", 1, c_name,
+                    min, max)
 
 
-def _c(name, vr, typ, desc, unit=None):
-    return Variable(name, vr, typ, "calculatedParameter", "fixed", desc, unit, None, "calculated")
+def _c(name, vr, typ, desc, unit=None, min=None, max=None):
+    return Variable(name, vr, typ, "calculatedParameter", "fixed", desc, unit, None, "calculated",
+                    1, "", min, max)
 
 
 VARIABLES: tuple[Variable, ...] = (
     Variable("time", 0, "Real", "independent", "continuous", "Simulation time", "s",
              c_name="TIME"),
     # --- parameters (issue #2 contract) ---------------------------------------
-    _p("profile", 1, "Integer", 3, "Profile: 1 = AL (acceleration-limited), 2 = JL (jerk-limited, "
-       "one jerk time T_F1), 3 = DJL (dissociated jerk-limited, jerk times T_F1..T_F4)"),
+    _p("profile", 1, "Enumeration", 3, "Profile: 1 = AL (acceleration-limited), 2 = JL "
+       "(jerk-limited, one jerk time T_F1), 3 = DJL (dissociated jerk-limited, jerk times "
+       "T_F1..T_F4)", min=1, max=3, declared_type="Profile"),
     _p("Te", 2, "Real", DEFAULT_TE, "Sampling period of the generator (any communication step "
-       "is accepted: outputs are the profile's exact values at the communication point)", "s",
-       c_name="TE"),
+       "is accepted: outputs are the profile's exact values at the communication point)",
+       "s", c_name="TE", positive=True, max=MAX_TE),
     _p("t_start", 3, "Real", 0.0, "Time at which the motion starts (at the first sample of the "
        "generator, FMU start time + k Te, at or after it)", "s"),
-    _p("x0", 4, "Real", 0.0, "Start position", "m"),
-    _p("distance", 5, "Real", 0.4, "Signed length of a single-segment move (n_segments = 0)", "m"),
-    _p("v_max", 6, "Real", 1.0, "Velocity limit (magnitude)", "m/s"),
-    _p("a_max", 7, "Real", 10.0, "Acceleration limit (magnitude, speeding up)", "m/s2"),
-    _p("d_max", 8, "Real", 10.0, "Deceleration limit (magnitude, slowing down)", "m/s2"),
+    _p("x0", 4, "Real", 0.0, "Start position", "m", min=-MAX_POSITION, max=MAX_POSITION),
+    _p("distance", 5, "Real", 0.4, "Signed length of a single-segment move (n_segments = 0)", "m",
+       min=-MAX_POSITION, max=MAX_POSITION),
+    _p("v_max", 6, "Real", 1.0, "Velocity limit (magnitude, > 0)", "m/s", positive=True),
+    _p("a_max", 7, "Real", 10.0, "Acceleration limit (magnitude, speeding up, > 0)", "m/s2",
+       positive=True),
+    _p("d_max", 8, "Real", 10.0, "Deceleration limit (magnitude, slowing down, > 0)", "m/s2",
+       positive=True),
     _p("T_F1", 9, "Real", 0.08, "Jerk time of stage 1 (start of acceleration); JL uses it for "
-       "all four stages", "s"),
-    _p("T_F2", 10, "Real", 0.08, "Jerk time of stage 2 (end of acceleration), DJL", "s"),
-    _p("T_F3", 11, "Real", 0.06, "Jerk time of stage 3 (start of deceleration), DJL", "s"),
-    _p("T_F4", 12, "Real", 0.05, "Jerk time of stage 4 (end of deceleration), DJL", "s"),
+       "all four stages; at least Te/2", "s", positive=True),
+    _p("T_F2", 10, "Real", 0.08, "Jerk time of stage 2 (end of acceleration), DJL", "s",
+       positive=True),
+    _p("T_F3", 11, "Real", 0.06, "Jerk time of stage 3 (start of deceleration), DJL", "s",
+       positive=True),
+    _p("T_F4", 12, "Real", 0.05, "Jerk time of stage 4 (end of deceleration), DJL", "s",
+       positive=True),
     # --- outputs (issue #2 contract) ------------------------------------------
     _o("x", 13, "Real", "Reference position", "m", variability="continuous"),
     _o("v", 14, "Real", "Reference velocity", "m/s", variability="continuous"),
@@ -114,32 +190,40 @@ VARIABLES: tuple[Variable, ...] = (
     # --- extensions -----------------------------------------------------------
     _p("v0", 20, "Real", 0.0, "Start velocity (the axis moves at v0 before t_start)", "m/s"),
     _p("v_e", 21, "Real", 0.0, "End velocity of a single-segment move (n_segments = 0)", "m/s"),
-    _p("short_stage", 22, "Integer", 1, "Acceleration/deceleration stage shorter than its jerk "
-       "times: 1 = stretch it so that every constant-jerk stage lasts its jerk time (lower "
+    _p("short_stage", 22, "Enumeration", 1, "Acceleration/deceleration stage shorter than its "
+       "jerk times: 1 = stretch it so that every constant-jerk stage lasts its jerk time (lower "
        "acceleration); 2 = let the two ramps overlap as in the paper (shorter stages, lower peak "
-       "acceleration; DJL merges a phase's jerk times when T_1 or T_3 would be negative)"),
+       "acceleration; DJL merges a phase's jerk times when T_1 or T_3 would be negative)",
+       min=1, max=2, declared_type="ShortStage"),
     _p("n_segments", 23, "Integer", 0, "0: single move given by distance and v_e; 1..32: "
-       "multi-segment move given by seg_distance[1..n] and seg_v_end[1..n]"),
+       "multi-segment move given by seg_distance[1..n] and seg_v_end[1..n]", min=0,
+       max=MAX_SEGMENTS),
     _o("x_AL", 30, "Real", "Acceleration-limited profile before the FIR filters: position "
        "(starts at x0)", "m", variability="continuous"),
     _o("v_AL", 31, "Real", "Acceleration-limited profile before the FIR filters: velocity", "m/s",
        variability="continuous"),
     _o("a_AL", 32, "Real", "Acceleration-limited profile before the FIR filters: acceleration "
        "over the sample interval that contains now", "m/s2"),
-    _o("segment", 33, "Integer", "1-based segment of the AL profile now; 0 before t_start"),
+    _o("segment", 33, "Integer", "1-based segment of the AL profile now; 0 before t_start",
+       min=0, max=MAX_SEGMENTS),
     _c("motion_time", 40, "Real", "Duration of the motion, filters included (ends at "
        "t_start + motion_time)", "s"),
-    _c("N_F1", 41, "Integer", "Jerk time of stage 1 in samples, round(T_F1/Te) (0 for AL)"),
-    _c("N_F2", 42, "Integer", "Jerk time of stage 2 in samples (JL: N_F1)"),
-    _c("N_F3", 43, "Integer", "Jerk time of stage 3 in samples (JL: N_F1)"),
-    _c("N_F4", 44, "Integer", "Jerk time of stage 4 in samples (JL: N_F1)"),
+    _c("N_F1", 41, "Integer", "Jerk time of stage 1 in samples, round(T_F1/Te) (0 for AL)",
+       min=0, max=MAX_FILTER_SAMPLES),
+    _c("N_F2", 42, "Integer", "Jerk time of stage 2 in samples (JL: N_F1)", min=0,
+       max=MAX_FILTER_SAMPLES),
+    _c("N_F3", 43, "Integer", "Jerk time of stage 3 in samples (JL: N_F1)", min=0,
+       max=MAX_FILTER_SAMPLES),
+    _c("N_F4", 44, "Integer", "Jerk time of stage 4 in samples (JL: N_F1)", min=0,
+       max=MAX_FILTER_SAMPLES),
     _c("v_reached", 45, "Real", "Largest peak velocity of the planned segments (magnitude)",
        "m/s"),
     _c("a_reached", 46, "Real", "Largest acceleration level of the planned stages (the "
        "Appendix's recomputed a_max)", "m/s2"),
     _c("d_reached", 47, "Real", "Largest deceleration level of the planned stages (the "
        "Appendix's recomputed d_max)", "m/s2"),
-    _p("seg_distance", 100, "Real", 0.0, "Signed length of each segment", "m", size=MAX_SEGMENTS),
+    _p("seg_distance", 100, "Real", 0.0, "Signed length of each segment", "m", size=MAX_SEGMENTS,
+       min=-MAX_POSITION, max=MAX_POSITION),
     _p("seg_v_end", 200, "Real", 0.0, "Velocity at the end of each segment (the last one is the "
        "end velocity of the motion)", "m/s", size=MAX_SEGMENTS),
 )

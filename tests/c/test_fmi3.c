@@ -97,6 +97,38 @@ static void run_multisegment_and_state(void)
     fmi3FreeInstance(c);
 }
 
+/* Enumerations (profile, short_stage) through Int64, as the standard says; Int32 still works. */
+static void run_enumerations(void)
+{
+    fmi3Instance c = make("enum", 1);
+    fmi3ValueReference vr = VR_PROFILE, vr2[2] = {VR_PROFILE, VR_SHORT_STAGE};
+    fmi3Int64 two = 2, back[2] = {0, 0}, huge = (fmi3Int64)1 << 40;
+    fmi3Int32 i32 = 0;
+    double vmax = 0.0;
+    CHECK(fmi3SetInt64(c, &vr, 1, &two, 1) == fmi3OK, "set profile as Int64");
+    CHECK(fmi3GetInt64(c, vr2, 2, back, 2) == fmi3OK && back[0] == 2 && back[1] == 1,
+          "get profile, short_stage as Int64: %lld %lld", (long long)back[0], (long long)back[1]);
+    CHECK(fmi3GetInt32(c, &vr, 1, &i32, 1) == fmi3OK && i32 == 2, "get profile as Int32");
+    expect_error(fmi3SetInt64(c, &vr, 1, &huge, 1), "out of the range");
+    CHECK(fmi3GetInt64(c, &vr, 1, back, 1) == fmi3OK && back[0] == 2, "unchanged after refusal");
+    vr = VR_N_SEGMENTS; /* an Int32, not an enumeration */
+    expect_error(fmi3SetInt64(c, &vr, 1, &two, 1), "not an Enumeration");
+    fmi3FreeInstance(c);
+    c = make("enum2", 1);
+    vr = VR_V_MAX;
+    expect_error(fmi3GetInt64(c, &vr, 1, back, 1), "not an Enumeration");
+    fmi3FreeInstance(c);
+    c = make("enum3", 1);
+    vr = VR_PROFILE;
+    two = 7;
+    CHECK(fmi3SetInt64(c, &vr, 1, &two, 1) == fmi3OK, "set profile 7 (checked at init)");
+    fmi3EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3False, 0.0);
+    expect_error(fmi3ExitInitializationMode(c), "profile = 7");
+    vr = VR_V_MAX;
+    CHECK(fmi3GetFloat64(c, &vr, 1, &vmax, 1) == fmi3OK && vmax == 1.0, "diagnostics");
+    fmi3FreeInstance(c);
+}
+
 static void run_bad_inputs(void)
 {
     fmi3Instance c;
@@ -288,6 +320,7 @@ static void run_dependencies(void)
 
 int main(void)
 {
+    run_enumerations();
     run_multisegment_and_state();
     run_bad_inputs();
     run_null_pointers();
