@@ -370,6 +370,9 @@ class Session:
                  engine: str = "fmu") -> None:
         if engine not in ENGINES:
             raise ValueError(f"unknown engine {engine!r}: choose from {', '.join(ENGINES)}")
+        if isinstance(fmi_version, bool) or not isinstance(fmi_version, int) \
+                or fmi_version not in (2, 3):
+            raise ValueError(f"fmi_version must be the integer 2 or 3, got {fmi_version!r}")
         self.fmu, self.fmi_version, self.engine = fmu, fmi_version, engine
         if engine == "fast":
             from .engine import FastAxis

@@ -789,15 +789,9 @@ class JerkTimeTable:
 
     def to_csv(self, path: str | Path) -> Path:
         """Write the CSV file atomically (temporary file, then rename); return its path."""
-        path = Path(path)
-        tmp = path.with_name(f".{path.name}.tmp")
-        try:
-            tmp.write_text(self.to_text(), encoding="utf-8")
-            tmp.replace(path)
-        except BaseException:
-            tmp.unlink(missing_ok=True)
-            raise
-        return path
+        from .results import write_text
+
+        return write_text(path, self.to_text())
 
     # ---------------------------------------------------------- lookup
 

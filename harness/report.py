@@ -302,7 +302,9 @@ def write_report(path: str | os.PathLike = "report.html", *, fast: bool = False,
     Parameters
     ----------
     path : path-like
-        HTML file to write (parent folders are created; written atomically).
+        HTML file to write (parent folders are created).  The HTML and its
+        figures are written as one set (:class:`harness.commands._outputs.OutputSet`):
+        an error or an interruption leaves the previous report whole.
     fast : bool
         Small grids (as in the test suite).
     fmi_version : {2, 3}
@@ -337,12 +339,11 @@ def write_report(path: str | os.PathLike = "report.html", *, fast: bool = False,
     results = run_claims(settings, only=only, on_result=on_result)
     img_src = None
     files_dir = path.with_name(path.stem + "_files")
+    pngs: dict[str, bytes] = {}
     if not embed:
-        files_dir.mkdir(parents=True, exist_ok=True)
-
         def img_src(n: int, i: int, png: bytes) -> str:
             name = f"claim{n}_{i + 1}.png" if n else f"peers_{i + 1}.png"
-            (files_dir / name).write_bytes(png)
+            pngs[name] = png
             return f"{files_dir.name}/{name}"
 
     if peers is None:
@@ -352,14 +353,14 @@ def write_report(path: str | os.PathLike = "report.html", *, fast: bool = False,
 
     text = render_html(results, settings=settings, elapsed=elapsed, command=command,
                        img_src=img_src, extra_sections=extra)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + f".tmp{os.getpid()}")
-    try:
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+    # the HTML and its figures: one set, replacing the previous one whole
+    from .commands._outputs import OutputSet
+
+    with OutputSet(path.parent) as o:
+        o.path(path.name).write_text(text, encoding="utf-8")
+        for name, png in pngs.items():
+            o.path(f"{files_dir.name}/{name}").write_bytes(png)
+        o.commit()
     return ReportSummary(path, results, time.perf_counter() - t0)
 
 

@@ -36,6 +36,7 @@ __all__ = [
     "plot_runs",
     "table2_rows",
     "write_csv",
+    "write_text",
 ]
 
 COLORS = {"AL": "0.45", "JL": "tab:blue", "DJL": "tab:red", "JL-optimal": "tab:cyan",
@@ -144,6 +145,26 @@ def write_csv(path: str | Path, rows: Sequence[Mapping[str, Any]]) -> Path:
             w.writeheader()
             for r in rows:
                 w.writerow({k: (f"{v:.10g}" if isinstance(v, float) else v) for k, v in r.items()})
+        os.chmod(tmp, _umask_mode())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def write_text(path: str | Path, text: str) -> Path:
+    """Write a text file atomically (a temporary file beside it, then rename); return its path.
+
+    The temporary file has a unique name (concurrent writers do not collide) and is
+    removed if writing fails or is interrupted: ``path`` holds the previous text or
+    the new one, never a part.
+    """
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
+            fh.write(text)
         os.chmod(tmp, _umask_mode())
         os.replace(tmp, path)
     except BaseException:

@@ -404,9 +404,10 @@ class Scenario:
             _check_fmu(self.source, "simulation.fmu", Path(fmu))
             sim = dataclasses.replace(sim, fmu=Path(fmu))
         if fmi_version is not None:
-            if fmi_version not in (2, 3):
+            if (isinstance(fmi_version, bool) or not isinstance(fmi_version, int)
+                    or fmi_version not in (2, 3)):
                 raise ScenarioError(self.source, "simulation.fmi_version", fmi_version,
-                                    "must be 2 or 3")
+                                    "must be the integer 2 or 3")
             sim = dataclasses.replace(sim, fmi_version=fmi_version)
         return dataclasses.replace(self, simulation=sim)
 

@@ -331,3 +331,158 @@ def test_an_undamped_mode_never_settles_and_that_is_not_a_failure(tmp_path, caps
     al = next(r for r in rows if r["profile"] == "AL")
     assert al["settling_time_s"] == "inf" and float(al["residual_m"]) > 0
     assert "never" in (out / "summary.txt").read_text()
+
+
+# ------------------------------------------------------------ 9. NaN backstop in every table
+
+def _nan_run(argv: list[str], out: Path, capsys) -> str:
+    """Run with a NaN metric: exit 1, nothing written (not even the folder); return stderr."""
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert "non-finite" in err and "nothing written" in err and "Traceback" not in err
+    assert not out.exists()
+    return err
+
+
+def test_nan_metric_in_a_map_is_a_failure(tmp_path, capsys, monkeypatch):
+    import math
+
+    import harness.evaluation
+
+    monkeypatch.setattr(harness.evaluation, "residual_peak", lambda *a, **k: math.nan)
+    scen = _write(tmp_path, BASE + "\n[map]\nz0 = [0.0]\nz_distance = [0.3]\n"
+                                   "distance = [0.2, 0.3]\nv_max = [2.0]\n")
+    out = tmp_path / "out"
+    err = _nan_run(["map", str(scen), "-o", str(out), "-q", "--workers", "1",
+                    "--engine", "fmu"], out, capsys)
+    assert "residual_peak_m = nan" in err and "hostile-map.csv" in err
+    assert "row 1 (move_index = 0, profile = AL)" in err
+
+
+def test_infinite_heat_map_value_is_a_failure(tmp_path, capsys, monkeypatch):
+    """A percentage may be NaN (n/a: blank in the heat map), never infinite."""
+    import math
+
+    import harness.results
+
+    monkeypatch.setattr(harness.results, "percent_of", lambda v, r: math.inf)
+    scen = _write(tmp_path, BASE + "\n[map]\nz0 = [0.0]\nz_distance = [0.3]\n"
+                                   "distance = [0.2]\nv_max = [2.0]\n")
+    out = tmp_path / "out"
+    err = _nan_run(["map", str(scen), "-o", str(out), "-q", "--workers", "1",
+                    "--engine", "fmu"], out, capsys)
+    assert "residual_pct_of_AL = inf" in err and "move_index = 0" in err
+
+
+def test_nan_metric_in_compare_is_a_failure(tmp_path, capsys, monkeypatch):
+    import dataclasses
+    import math
+
+    import harness.cosim
+    from harness.peers.ruckig_ref import ruckig_available
+
+    if not ruckig_available():
+        pytest.skip("compare needs ruckig")
+    real = harness.cosim.profile_metrics
+
+    def nan_residual(*a, **k):  # the peers' metrics
+        return dataclasses.replace(real(*a, **k), residual=math.nan)
+
+    monkeypatch.setattr(harness.cosim, "profile_metrics", nan_residual)
+    out = tmp_path / "out"
+    err = _nan_run(["compare", "X", "--peers", "AL*ZV", "--no-tuned-djl", "--timeopt", "0",
+                    "--no-stationary", "--no-plot", "-q", "-o", str(out)], out, capsys)
+    assert "X.csv: residual_m = nan" in err and "method = AL*ZV" in err
+
+
+def test_nan_in_compare_curves_and_timeopt_is_a_failure(tmp_path, capsys, monkeypatch):
+    """The robustness curves and the time-optimal table are checked too (NaN in a curve)."""
+    import math
+
+    import numpy as np
+
+    import harness.peers.compare as pc
+    from harness.peers.ruckig_ref import ruckig_available
+
+    if not ruckig_available():
+        pytest.skip("compare needs ruckig")
+    real = pc.robustness_curve
+
+    def nan_curve(*a, **k):
+        rc = real(*a, **k)
+        for v in rc.residual.values():
+            v[np.argmin(np.abs(rc.error))] = math.nan
+        return rc
+
+    monkeypatch.setattr(pc, "robustness_curve", nan_curve)
+    out = tmp_path / "out"
+    err = _nan_run(["compare", "X", "--peers", "AL*ZV", "--no-tuned-djl", "--timeopt", "0",
+                    "--no-stationary", "--no-plot", "-q", "-o", str(out)], out, capsys)
+    assert "X-robustness.csv: residual_m = nan" in err and "frequency_error = 0.0" in err
+
+
+def test_nan_residual_in_tune_is_a_failure(tmp_path, capsys, monkeypatch):
+    import math
+
+    pytest.importorskip("harness._engine")
+    import harness.optimize
+
+    real = harness.optimize.Objective.residuals
+
+    def nan_residuals(self, *a, **k):
+        T, r = real(self, *a, **k)
+        return T, r * math.nan
+
+    monkeypatch.setattr(harness.optimize.Objective, "residuals", nan_residuals)
+    out = tmp_path / "out"
+    err = _nan_run(["tune", str(_write(tmp_path, BASE)), "--single", "--tuning", "paper",
+                    "-q", "-o", str(out)], out, capsys)
+    assert "hostile-jerk-times.csv: residual_m = nan in row 1 (move_index = 0" in err
+
+
+def test_check_rows_finite_names_column_and_row():
+    import math
+
+    from harness.commands._common import CommandError, check_rows_finite
+
+    rows = [{"k": 1, "a": 1.0, "b": math.nan}, {"k": 2, "a": math.inf, "b": 2.0}]
+    check_rows_finite(rows, "t", finite=(), no_inf=("b",), keys=("k",))  # NaN allowed there
+    with pytest.raises(CommandError, match=r"^t: a = inf in row 2 \(k = 2\)") as ei:
+        check_rows_finite(rows, "t", finite=("a",), keys=("k",))
+    assert ei.value.status == 1
+    with pytest.raises(CommandError, match="b = nan in row 1"):
+        check_rows_finite(rows, "t", finite=("b",))
+    with pytest.raises(CommandError, match="a = inf in row 2"):
+        check_rows_finite(rows, "t", finite=(), no_inf=("a",))
+
+
+# ------------------------------------------------------------ 10. strict integers
+
+@pytest.mark.parametrize("text, key", [
+    (BASE.replace("[simulation]", "[simulation]\nfmi_version = 2.0"), "simulation.fmi_version"),
+    (BASE.replace("[simulation]", "[simulation]\nshort_stage = 2.0"), "simulation.short_stage"),
+    (BASE + "\n[compare]\ntune_mode = 1.0\n", "compare.tune_mode"),
+], ids=["fmi_version", "short_stage", "tune_mode"])
+def test_a_whole_float_for_an_integer_key_is_refused(tmp_path, capsys, text, key):
+    """2.0 where an integer is expected is an error, as 2.9 is (never read as 2)."""
+    p = _write(tmp_path, text)
+    msg = _refused(p, key)
+    assert "2.0" in msg or "1.0" in msg
+    out = tmp_path / "out"
+    assert main(["simulate", str(p), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert key in err and "integer" in err and not out.exists()
+
+
+@pytest.mark.parametrize("value", [3.0, 2.5, True, "3"])
+def test_python_api_fmi_version_must_be_an_int(value):
+    from harness.cosim import Session, run_scenario
+
+    sc = load_scenario("X")
+    with pytest.raises(ScenarioError, match=r"simulation\.fmi_version = .*must be the integer"):
+        sc.with_fmu(None, value)
+    with pytest.raises(ScenarioError, match="fmi_version"):
+        run_scenario(sc, fmi_version=value)
+    with pytest.raises(ValueError, match=f"fmi_version must be the integer 2 or 3, got {value!r}"):
+        Session(fmi_version=value)
+    assert sc.with_fmu(None, 3).simulation.fmi_version == 3

@@ -1,15 +1,20 @@
-"""What the scenario commands (``simulate``, ``compare``) share.
+"""What the commands (``simulate``, ``compare``, ``map``, ``tune``...) share.
 
-Both check every input before running anything and write their outputs only
-once every run has succeeded, all or nothing.
+They check every input before running anything, refuse a non-finite result, and
+write their outputs only once every run has succeeded, as one set that replaces
+the previous one whole (:func:`write_outputs`, :mod:`harness.commands._outputs`).
 """
 
 from __future__ import annotations
 
+import argparse
+import functools
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
+
+from ._outputs import OutputSet, Terminated, sigterm_raises
 
 
 class CommandError(Exception):
@@ -172,29 +177,93 @@ def check_stems(scenarios: Sequence[Any]) -> None:
                            + ", ".join(s.name for s in scenarios))
 
 
-def write_outputs(out: Path, write: Callable[[list[Path]], None], summary: str) -> list[Path]:
-    """Create ``out``, let ``write`` add its files to the list, then write ``summary.txt``.
+def write_outputs(out: Path, write: Callable[[OutputSet], None], summary: str) -> list[Path]:
+    """Write a command's output set in ``out``: ``write``'s files, then ``summary.txt``.
 
-    If anything fails, the files already written are removed and
-    :class:`CommandError` (status 1) is raised: nothing is left half-written.
+    ``write`` writes each file at ``o.path(name)`` of the :class:`OutputSet` it
+    is given (a staging folder in ``out``); once it returns, the whole set
+    replaces the previous one in a single pass (:mod:`harness.commands._outputs`):
+    an error or an interruption at any point leaves the previous files as they
+    were, and no temporary folder.
+
+    Returns
+    -------
+    list of Path
+        The files written, in the order ``write`` named them, ``summary.txt`` last.
+
+    Raises
+    ------
+    CommandError
+        Status 1 if a file cannot be written (nothing written); a
+        :class:`CommandError` raised by ``write`` goes through as it is.
     """
-    written: list[Path] = []
     try:
-        out.mkdir(parents=True, exist_ok=True)
-        write(written)
-        tmp = out / ".summary.txt.tmp"
-        tmp.write_text(summary + "\n", encoding="utf-8")
-        tmp.replace(out / "summary.txt")
-        written.append(out / "summary.txt")
+        with OutputSet(out) as o:
+            write(o)
+            o.path("summary.txt").write_text(summary + "\n", encoding="utf-8")
+            return o.commit()
     except CommandError:
-        for p in written:
-            p.unlink(missing_ok=True)
         raise
     except (OSError, RuntimeError) as e:
-        for p in written:
-            p.unlink(missing_ok=True)
         raise CommandError(1, f"cannot write the outputs in {out}: {e}") from None
-    return written
+
+
+def interruptible(run: Callable[[argparse.Namespace], int]
+                  ) -> Callable[[argparse.Namespace], int]:
+    """Wrap a command's ``run``: SIGTERM stops it like Ctrl-C (exit 143), clean-ups run.
+
+    By default SIGTERM ends Python at once, skipping every ``finally`` (staging
+    folders would stay behind); here it raises inside the command.
+    """
+
+    @functools.wraps(run)
+    def wrapper(args: argparse.Namespace) -> int:
+        with sigterm_raises():
+            try:
+                return run(args)
+            except Terminated:
+                raise CommandError(143, "terminated (SIGTERM)") from None
+
+    return wrapper
+
+
+def check_rows_finite(rows: Sequence[Mapping[str, Any]], what: str, *,
+                      finite: Sequence[str], no_inf: Sequence[str] = (),
+                      keys: Sequence[str] = ()) -> None:
+    """Refuse a NaN or an infinity in a ``finite`` column, an infinity in a ``no_inf`` one.
+
+    ``no_inf`` columns may be NaN (a documented "n/a": a percentage of a zero
+    reference, a quantity not computed), never infinite.
+
+    Parameters
+    ----------
+    rows : sequence of mapping
+        The table, e.g. the rows of a CSV about to be written.
+    what : str
+        Start of the message, e.g. ``"map failed (X)"``.
+    finite, no_inf : sequence of str
+        Column names (absent columns are skipped).
+    keys : sequence of str
+        Columns that identify a row in the message (e.g. ``move_index``, ``profile``).
+
+    Raises
+    ------
+    CommandError
+        Status 1, naming the column, the row (1-based) and its keys.
+    """
+    import math
+
+    for i, row in enumerate(rows):
+        for cols, bad in ((finite, lambda v: not math.isfinite(v)),
+                          (no_inf, math.isinf)):
+            for c in cols:
+                v = row.get(c)
+                if isinstance(v, bool) or not isinstance(v, (int, float)) or not bad(v):
+                    continue
+                where = ", ".join(f"{k} = {row[k]}" for k in keys if k in row)
+                raise CommandError(1, f"{what}: {c} = {v} in row {i + 1}"
+                                      + (f" ({where})" if where else "")
+                                      + ": a non-finite result (nothing written)")
 
 
 def report_written(out: Path, written: Sequence[Path], summary: str, quiet: bool) -> None:

@@ -6,6 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from ._common import interruptible
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``build`` command."""
@@ -26,15 +28,20 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--cc", default="gcc", help="C compiler (default: gcc)")
     p.add_argument("--no-validate", action="store_true",
                    help="skip fmpy.validation.validate_fmu on the result")
-    p.set_defaults(func=run)
+    p.set_defaults(func=interruptible(run))
 
 
 def run(args: argparse.Namespace) -> int:
     """Build, validate, report."""
     from ..fmu.build import BuildError, build_fmu
+    from ._outputs import OutputSet
 
+    out: Path = args.output
     try:
-        path = build_fmu(args.fmi_version, args.output, cc=args.cc)
+        # built next to the destination, then renamed over it: never a partial file
+        with OutputSet(out.parent) as o:
+            build_fmu(args.fmi_version, o.path(out.name), cc=args.cc)
+            (path,) = o.commit()
     except BuildError as e:
         print(f"djl-fmu build: {e}", file=sys.stderr)
         return 1

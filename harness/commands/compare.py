@@ -5,6 +5,12 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+from ._common import interruptible
+
+if TYPE_CHECKING:
+    from ._outputs import OutputSet
 
 DESCRIPTION = """\
 Answer "which law ends the motion soonest with the vibration inside my
@@ -75,8 +81,20 @@ examples:
   djl-fmu compare --engine fast --no-tuned-djl
 
 Exit status: 0 on success, 2 for a bad scenario or option (nothing run, nothing
-written), 1 if a run fails.
+written), 1 if a run fails or a result is not finite (nothing written).
+The outputs replace the previous ones as one set: after a failure or an
+interruption (Ctrl-C: 130, SIGTERM: 143) the previous files are as they were
+(docs/harness.md, Outputs).
 """
+
+
+COMPARE_FINITE = ("motion_time_s", "motion_time_over_time_optimal", "residual_m",
+                  "free_amplitude_m")
+"""Columns of ``<name>.csv`` that must be finite numbers (a NaN or an infinity: exit 1)."""
+
+COMPARE_NO_INF = ("worst_residual_10pct_m", "residual_pct_of_AL", "worst_residual_10pct_pct_of_AL")
+"""Columns that may be NaN (not computed, or a percentage of a zero AL residual), never
+infinite.  The settling time may be infinite: a mode that never settles ("never")."""
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -119,7 +137,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "+/-E (default: the scenario's map_error, 0.1)")
     p.add_argument("--no-plot", action="store_true", help="do not write the PNG figures")
     p.add_argument("-q", "--quiet", action="store_true", help="do not print the tables")
-    p.set_defaults(func=run)
+    p.set_defaults(func=interruptible(run))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -133,6 +151,7 @@ def run(args: argparse.Namespace) -> int:
     from ._common import (
         CommandError,
         apply_tuning,
+        check_rows_finite,
         check_stems,
         load_scenarios,
         report_written,
@@ -191,6 +210,28 @@ def run(args: argparse.Namespace) -> int:
     except (FMUError, ValueError, RuntimeError, OSError) as e:
         raise CommandError(1, f"run failed ({current}): {e}") from None
 
+    # a NaN or an infinity in a metric is a failure, never written
+    timeopt_rows = []
+    if table_t is not None:
+        timeopt_rows = [{"method": m.method, "case": m.case, "distance_m": m.distance,
+                         "v_max_m_s": m.v_max, "a_max_m_s2": m.a_max, "j_max_m_s3": m.j_max,
+                         "T_F1_s": m.T_F[0], "T_F2_s": m.T_F[1], "T_F3_s": m.T_F[2],
+                         "T_F4_s": m.T_F[3], "T_opt_s": m.T_opt, "T_fmu_s": m.T_fmu,
+                         "excess_samples": m.excess_samples, "excess_pct": m.excess_percent}
+                        for m in table_t.rows]
+    for stem, r in zip(stems, results, strict=True):
+        check_rows_finite(r.rows(), f"run failed ({r.scenario.name}): {stem}.csv",
+                          finite=COMPARE_FINITE, no_inf=COMPARE_NO_INF,
+                          keys=("scenario", "method"))
+        check_rows_finite(r.robustness_rows(),
+                          f"run failed ({r.scenario.name}): {stem}-robustness.csv",
+                          finite=("residual_m",), keys=("method", "frequency_error"))
+        check_rows_finite(r.map_error_rows(),
+                          f"run failed ({r.scenario.name}): {stem}-map-error.csv",
+                          finite=("residual_m",), keys=("method", "map_error"))
+    check_rows_finite(timeopt_rows, "run failed (time-optimal measurement): timeopt.csv",
+                      finite=("T_opt_s", "T_fmu_s", "excess_pct"), keys=("method", "case"))
+
     texts = [r.table() for r in results]
     if table_t is not None:
         texts.append("FIR-built profiles against the time-optimal JL (ruckig), random moves "
@@ -198,29 +239,22 @@ def run(args: argparse.Namespace) -> int:
                      "only, III: neither, IV: v_max only):\n" + table_t.to_text())
     summary = "\n\n".join(texts)
 
-    # 3. write everything, or nothing
+    # 3. write everything, or nothing: one set replacing the previous one
     out: Path = args.out
 
-    def write(written: list[Path]) -> None:
+    def write(o: OutputSet) -> None:
         for stem, r in zip(stems, results, strict=True):
-            written.append(r.to_csv(out / f"{stem}.csv"))
+            r.to_csv(o.path(f"{stem}.csv"))
             if r.map_error is not None:
-                written.append(write_csv(out / f"{stem}-map-error.csv", r.map_error_rows()))
-            written.append(write_csv(out / f"{stem}-robustness.csv", r.robustness_rows()))
+                write_csv(o.path(f"{stem}-map-error.csv"), r.map_error_rows())
+            write_csv(o.path(f"{stem}-robustness.csv"), r.robustness_rows())
             if not args.no_plot:
                 if r.map_error is not None:
-                    written.append(save_figure(r.plot_map_error(),
-                                               out / f"{stem}-map-error.png"))
-                written.append(save_figure(r.plot(), out / f"{stem}-robustness.png"))
-                written.append(save_figure(r.plot_runs(), out / f"{stem}-runs.png"))
+                    save_figure(r.plot_map_error(), o.path(f"{stem}-map-error.png"))
+                save_figure(r.plot(), o.path(f"{stem}-robustness.png"))
+                save_figure(r.plot_runs(), o.path(f"{stem}-runs.png"))
         if table_t is not None:
-            rows = [{"method": m.method, "case": m.case, "distance_m": m.distance,
-                     "v_max_m_s": m.v_max, "a_max_m_s2": m.a_max, "j_max_m_s3": m.j_max,
-                     "T_F1_s": m.T_F[0], "T_F2_s": m.T_F[1], "T_F3_s": m.T_F[2],
-                     "T_F4_s": m.T_F[3], "T_opt_s": m.T_opt, "T_fmu_s": m.T_fmu,
-                     "excess_samples": m.excess_samples, "excess_pct": m.excess_percent}
-                    for m in table_t.rows]
-            written.append(write_csv(out / "timeopt.csv", rows))
+            write_csv(o.path("timeopt.csv"), timeopt_rows)
 
     written = write_outputs(out, write, summary)
     report_written(out, written, summary, args.quiet)

@@ -5,8 +5,14 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+from ._common import interruptible
+
+if TYPE_CHECKING:
+    from ._outputs import OutputSet
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -24,15 +30,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", type=Path, default=Path("djl-fmu-out"), metavar="DIR",
                    help="output folder (default: ./djl-fmu-out)")
     p.add_argument("--no-plot", action="store_true", help="do not write the PNG")
-    p.set_defaults(func=run)
+    p.set_defaults(func=interruptible(run))
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run the demo; non-zero exit if a check fails."""
-    from fmpy.validation import validate_fmu
+    """Run the demo; non-zero exit if a check fails.
 
-    from ..fmu.build import BuildError, build_fmu, check_compiler
-    from ..fmu.runner import generate
+    The FMUs and the figure are written as one set (:class:`~harness.commands._outputs.
+    OutputSet`): built and checked in a staging folder in OUT, then swapped in together.
+    """
+    from ..fmu.build import BuildError, check_compiler
+    from ._outputs import OutputSet
 
     out: Path = args.out
     try:
@@ -43,22 +51,36 @@ def run(args: argparse.Namespace) -> int:
     if out.exists() and not out.is_dir():
         print(f"djl-fmu demo: --out {out} exists and is not a directory", file=sys.stderr)
         return 2
+    try:
+        with OutputSet(out) as o:
+            ok = _demo(o, args.no_plot)
+            o.commit()
+    except (BuildError, OSError) as e:
+        print(f"djl-fmu demo: cannot write the outputs in {out}: {e}", file=sys.stderr)
+        return 1
+    if not ok:
+        print("djl-fmu demo: a check failed (see above)", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _demo(o: OutputSet, no_plot: bool) -> bool:
+    """Build, validate and run the FMUs, draw the figure, all in ``o``; True if all passed."""
+    from fmpy.validation import validate_fmu
+
+    from ..fmu.build import build_fmu
+    from ..fmu.runner import generate
+
     ok = True
     fmus = {}
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-        for v in (2, 3):
-            fmus[v] = build_fmu(v, out / f"JerkLimitedTrajectory-fmi{v}.fmu")
-    except (BuildError, OSError) as e:
-        print(f"djl-fmu demo: cannot build the FMUs in {out}: {e}", file=sys.stderr)
-        return 1
     for v in (2, 3):
-        path = fmus[v]
-        problems = validate_fmu(str(path))
-        fmus[v] = path
+        name = f"JerkLimitedTrajectory-fmi{v}.fmu"
+        fmus[v] = build_fmu(v, o.path(name))
+    for v in (2, 3):
+        problems = validate_fmu(str(fmus[v]))
         status = "valid" if not problems else "INVALID: " + "; ".join(problems)
         ok &= not problems
-        print(f"FMU (FMI {v}.0): {path} [{status}]")
+        print(f"FMU (FMI {v}.0): {o.final(f'JerkLimitedTrajectory-fmi{v}.fmu')} [{status}]")
 
     tr = {v: generate(fmu=fmus[v]) for v in (2, 3)}
     d = tr[2]
@@ -86,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"  FMI 2.0 and FMI 3.0 outputs identical: {'yes' if same else 'NO'} "
           f"({len(d.t)} samples)")
     ok &= abs(err_x) <= 1e-9 * abs(p["distance"])
-    if not args.no_plot:
+    if not no_plot:
         import matplotlib
 
         matplotlib.use("Agg")
@@ -96,11 +118,7 @@ def run(args: argparse.Namespace) -> int:
         for ax, name in zip(fig.axes, ("x", "v", "a", "j"), strict=True):
             ax.plot(jl.t, getattr(jl, name), ":", lw=1, label=f"{name} JL")
         fig.axes[2].legend(loc="lower right", fontsize="small")
-        png = out / "demo_djl.png"
-        fig.savefig(png, dpi=110)
+        fig.savefig(o.path("demo_djl.png"), dpi=110)
         plt.close(fig)
-        print(f"  plot: {png}")
-    if not ok:
-        print("djl-fmu demo: a check failed (see above)", file=sys.stderr)
-        return 1
-    return 0
+        print(f"  plot: {o.final('demo_djl.png')}")
+    return bool(ok)

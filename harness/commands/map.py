@@ -4,8 +4,12 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from ._common import TUNING_HELP
+from ._common import TUNING_HELP, interruptible
+
+if TYPE_CHECKING:
+    from ._outputs import OutputSet
 
 DESCRIPTION = """\
 Map the workspace: run every move of a grid and measure, for each compared
@@ -52,8 +56,23 @@ examples:
   djl-fmu map X --engine fmu --max-moves 20    through the generator FMUs (slower)
 
 Exit status: 0 on success, 2 for a bad scenario or option, or an unreachable
-scheduler (nothing simulated, nothing written), 1 if a move fails.
+scheduler (nothing simulated, nothing written), 1 if a move fails or a result is
+not finite (nothing written).
+The outputs replace the previous ones as one set: after a failure or an
+interruption (Ctrl-C: 130, SIGTERM: 143) the previous files are as they were
+(docs/harness.md, Outputs).
 """
+
+
+MAP_FINITE = ("residual_m", "free_amplitude_m", "residual_peak_m", "motion_time_s")
+"""Columns of ``<name>-map.csv`` that must be finite numbers (a NaN or an infinity: exit 1);
+``residual_m`` is also the absolute heat map."""
+
+MAP_NO_INF = ("residual_pct_of_AL", "case_djl_vs_jl_residual_pct",
+              "case_djl_vs_jl_settling_pct", "residual_worst_map10_m")
+"""Columns that may be NaN (a percentage of a zero reference, a settling time that never
+comes, a worst case not computed: blank in the heat maps), never infinite.  The settling
+and rise times may be infinite or NaN: "never", "not within the record"."""
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -89,7 +108,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-plot", action="store_true", help="do not write the PNG heat maps")
     p.add_argument("-q", "--quiet", action="store_true",
                    help="no progress bar, do not print the summary")
-    p.set_defaults(func=run)
+    p.set_defaults(func=interruptible(run))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -105,6 +124,7 @@ def run(args: argparse.Namespace) -> int:
         CommandError,
         apply_tuning,
         check_parallel_options,
+        check_rows_finite,
         load_scenarios,
         parse_tuning,
         report_written,
@@ -139,15 +159,18 @@ def run(args: argparse.Namespace) -> int:
                 raise CommandError(1, f"map failed ({sc.name}): {e}") from None
     except ExecutorError as e:
         raise CommandError(2, str(e)) from None
+    # a NaN or an infinity in a metric (CSV, heat maps) is a failure, never written
+    check_rows_finite(res.rows(), f"map failed ({sc.name}): {stem}-map.csv",
+                      finite=MAP_FINITE, no_inf=MAP_NO_INF, keys=("move_index", "profile"))
     summary = res.table()
 
-    # 3. write everything, or nothing
-    def write(written: list[Path]) -> None:
-        written.append(res.to_csv(args.out / f"{stem}-map.csv"))
+    # 3. write everything, or nothing: one set replacing the previous one
+    def write(o: OutputSet) -> None:
+        res.to_csv(o.path(f"{stem}-map.csv"))
         if not args.no_plot:
             for i, (name, fig) in enumerate(res.figures().items()):
                 fname = f"{stem}-map.png" if i == 0 else f"{stem}-map-{name}.png"
-                written.append(save_figure(fig, args.out / fname))
+                save_figure(fig, o.path(fname))
 
     written = write_outputs(args.out, write, summary)
     report_written(args.out, written, summary, args.quiet)

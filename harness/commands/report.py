@@ -6,6 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from ._common import interruptible
+
 
 def _claim_list(text: str) -> list[int]:
     try:
@@ -60,7 +62,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-peers", action="store_true",
                    help="leave out the section comparing AL/JL/DJL with the peer methods "
                         "(time-optimal JL, Sato, input shapers, damped jerk; needs ruckig)")
-    p.set_defaults(func=run)
+    p.set_defaults(func=interruptible(run))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -122,11 +124,16 @@ def run(args: argparse.Namespace) -> int:
         + (["--claims", ",".join(map(str, args.claims))] if args.claims else [])
         + (["--no-peers"] if args.no_peers else [])
         + (["--fmu", str(args.fmu)] if args.fmu else ["--fmi-version", str(args.fmi_version)]))
-    summary = write_report(args.output, fast=args.fast, fmi_version=args.fmi_version,
-                           fmu=args.fmu, only=args.claims, embed=not args.figures_beside,
-                           progress=True, command=command,
-                           on_result=lambda r: print(r.summary(), flush=True),
-                           peers=False if args.no_peers else None)
+    try:
+        summary = write_report(args.output, fast=args.fast, fmi_version=args.fmi_version,
+                               fmu=args.fmu, only=args.claims, embed=not args.figures_beside,
+                               progress=True, command=command,
+                               on_result=lambda r: print(r.summary(), flush=True),
+                               peers=False if args.no_peers else None)
+    except OSError as e:
+        print(f"djl-fmu report: cannot write {args.output}: {e} (the previous report, if any, "
+              f"is unchanged)", file=sys.stderr)
+        return 1
     print()
     print_failures(summary)
     n_ok = sum(r.passed for r in summary.results)

@@ -5,8 +5,12 @@ from __future__ import annotations
 import argparse
 import functools
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from ._common import TUNING_HELP
+from ._common import TUNING_HELP, interruptible
+
+if TYPE_CHECKING:
+    from ._outputs import OutputSet
 
 DESCRIPTION = """\
 Co-simulate the generator FMU (one instance for the excited X or Y axis, one for
@@ -46,7 +50,10 @@ examples:
   djl-fmu simulate --list                  the embedded scenarios
 
 Exit status: 0 on success, 2 for a bad scenario or option (nothing simulated, nothing
-written), 1 if a simulation fails.
+written), 1 if a simulation fails or a result is not finite (nothing written).
+The outputs replace the previous ones as one set: after a failure or an
+interruption (Ctrl-C: 130, SIGTERM: 143) the previous files are as they were
+(docs/harness.md, Outputs).
 """
 
 
@@ -88,7 +95,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-q", "--quiet", action="store_true", help="do not print the tables")
     p.add_argument("--no-fmus", action="store_true",
                    help="in the default run, do not write the FMI 2.0 / 3.0 FMU files")
-    p.set_defaults(func=run)
+    p.set_defaults(func=interruptible(run))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -157,23 +164,19 @@ def run(args: argparse.Namespace) -> int:
             texts.append(format_table2(sweeps))
         summary = "\n\n".join(texts)
 
-        # 3. write everything, or nothing
-        def write(written: list[Path]) -> None:
+        # 3. write everything, or nothing: one set replacing the previous one
+        def write(o: OutputSet) -> None:
             for stem, r in zip(stems, results, strict=True):
-                written.append(r.to_csv(args.out / f"{stem}.csv"))
+                r.to_csv(o.path(f"{stem}.csv"))
                 rob = getattr(r, "robustness", None)
                 if rob is not None:
-                    written.append(write_csv(args.out / f"{stem}-robustness.csv", rob.rows()))
+                    write_csv(o.path(f"{stem}-robustness.csv"), rob.rows())
             for name in figures:
-                dest = args.out / name
-                tmp = args.out / f".{name}.tmp"
-                shutil.copyfile(staging / name, tmp)
-                tmp.replace(dest)
-                written.append(dest)
+                shutil.copyfile(staging / name, o.path(name))
             if sweeps:
-                written.append(write_csv(args.out / "table2.csv", table2_rows(sweeps)))
+                write_csv(o.path("table2.csv"), table2_rows(sweeps))
             if not args.scenarios and not args.no_fmus:
-                _write_fmus(args.out, written)
+                _write_fmus(o)
 
         written = write_outputs(args.out, write, summary)
     finally:
@@ -198,8 +201,8 @@ def _scenario_task(sc, stem: str, staging: Path, progress: bool, engine: str | N
     return r, names
 
 
-def _write_fmus(out: Path, written: list[Path]) -> None:
-    """Write the two FMUs (built from this package, validated) for the default run.
+def _write_fmus(o: OutputSet) -> None:
+    """Add the two FMUs (built from this package, validated) to the default run's outputs.
 
     The FMUs come from the build cache (:func:`harness.fmu.build.default_fmu`, keyed by a
     hash of the sources, model description and flags: editing the C code rebuilds them);
@@ -222,8 +225,4 @@ def _write_fmus(out: Path, written: list[Path]) -> None:
             if problems:
                 raise CommandError(1, f"{cached} does not validate: " + "; ".join(problems))
             stamp.write_text(digest + "\n", encoding="utf-8")
-        path = out / f"JerkLimitedTrajectory-fmi{v}.fmu"
-        tmp = path.with_name(f".{path.name}.tmp")
-        shutil.copyfile(cached, tmp)
-        tmp.replace(path)
-        written.append(path)
+        shutil.copyfile(cached, o.path(f"JerkLimitedTrajectory-fmi{v}.fmu"))

@@ -6,6 +6,12 @@ import argparse
 import math
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+from ._common import interruptible
+
+if TYPE_CHECKING:
+    from ._outputs import OutputSet
 
 DESCRIPTION = """\
 Tune the jerk times of JL and DJL for a move, every case of a [sweep] or every
@@ -61,8 +67,19 @@ examples:
   djl-fmu tune my_axis.toml --map-error 0.15 --scheduler tcp://10.0.0.5:8786
 
 Exit status: 0 on success, 2 for a bad scenario or option (nothing tuned, nothing
-written), 1 if a move fails or the outputs cannot be written (nothing written).
+written), 1 if a move fails, a result is not finite or the outputs cannot be written
+(nothing written).
+The outputs replace the previous ones as one set: after a failure or an
+interruption (Ctrl-C: 130, SIGTERM: 143) the previous files are as they were
+(docs/harness.md, Outputs).
 """
+
+
+TUNE_FINITE = ("jl_T_F_s", "djl_T_F1_s", "djl_T_F2_s", "djl_T_F3_s", "djl_T_F4_s",
+               "residual_m", "worst_residual_m", "jl_residual_m", "jl_worst_residual_m",
+               "motion_time_s", "jl_motion_time_s")
+"""Columns of ``<name>-jerk-times.csv`` that must be finite numbers: the exported jerk
+times, residuals and motion times (a NaN or an infinity: exit 1, nothing written)."""
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -98,7 +115,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="tune only the first N moves of the [map] grid or [sweep]")
     p.add_argument("-q", "--quiet", action="store_true",
                    help="no progress bar, do not print the table")
-    p.set_defaults(func=run)
+    p.set_defaults(func=interruptible(run))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -114,6 +131,7 @@ def run(args: argparse.Namespace) -> int:
         CommandError,
         check_out_dir,
         check_parallel_options,
+        check_rows_finite,
         load_scenarios,
         report_written,
         write_outputs,
@@ -163,11 +181,15 @@ def run(args: argparse.Namespace) -> int:
                 raise CommandError(1, f"tuning failed ({sc.name}): {e}") from None
     except ExecutorError as e:
         raise CommandError(2, str(e)) from None
+    # a NaN or an infinity in an exported jerk time or residual is a failure, never written
+    check_rows_finite(tab.rows, f"tuning failed ({sc.name}): {stem}-jerk-times.csv",
+                      finite=TUNE_FINITE, keys=("move_index", "z0_m", "z_distance_m",
+                                                "distance_m", "v_max_m_s"))
     summary = tab.table()
 
-    # 3. write everything, or nothing
-    def write(written: list[Path]) -> None:
-        written.append(tab.to_csv(args.out / f"{stem}-jerk-times.csv"))
+    # 3. write everything, or nothing: one set replacing the previous one
+    def write(o: OutputSet) -> None:
+        tab.to_csv(o.path(f"{stem}-jerk-times.csv"))
 
     written = write_outputs(args.out, write, summary)
     report_written(args.out, written, summary, args.quiet)
