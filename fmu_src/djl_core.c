@@ -106,6 +106,11 @@ static djl_status check_positive(djl_error *err, const char *name, double v, con
     if (!isfinite(v) || !(v > 0.0))
         return set_error(err, DJL_E_PARAM, name, v,
                          "%s = %g %s: must be a finite number > 0", name, v, unit);
+    if (v < DJL_MIN_MAGNITUDE)
+        return set_error(err, DJL_E_PARAM, name, v,
+                         "%s = %g %s: must be at least %g %s (a subnormal double has too few "
+                         "significant digits to be planned exactly)", name, v, unit,
+                         DJL_MIN_MAGNITUDE, unit);
     return DJL_OK;
 }
 
@@ -178,11 +183,11 @@ djl_status djl_validate(const djl_params *p, djl_error *err)
             snprintf(sname, sizeof sname, "seg_v_end[%d]", i);
         if (!isfinite(D))
             return set_error(err, DJL_E_PARAM, dname, D, "%s = %g m: must be finite", dname, D);
-        if (D != 0.0 && fabs(D) < DJL_MIN_DISTANCE)
+        if (D != 0.0 && fabs(D) < DJL_MIN_MAGNITUDE)
             return set_error(err, DJL_E_PARAM, dname, D,
                              "%s = %g m: a non-zero distance must be at least %g m in magnitude "
                              "(a subnormal double has too few significant digits to be planned "
-                             "exactly)", dname, D, DJL_MIN_DISTANCE);
+                             "exactly)", dname, D, DJL_MIN_MAGNITUDE);
         reach += fabs(D);
         if (reach > DJL_MAX_POSITION)
             return set_error(err, DJL_E_PARAM, dname, D,
@@ -234,6 +239,7 @@ typedef struct {
     double g;           /* samples of cruise at vs before the first stage (DJL: wait for the
                            previous segment's ramps to end) */
     int merge23;        /* fallback branches: ramps 2 and 3 may coincide */
+    int precise;        /* distance formulas relative to each stage (djl_plan_motion's retry) */
     int32_t N1, N2, N3, N4;
 } sctx;
 
@@ -286,6 +292,28 @@ static int64_t kmin(const sctx *c)
 static double La(const sctx *c) { return (double)nmin_a(c) + 0.5 * (c->N2 - c->N1); }
 static double Ld(const sctx *c) { return (double)nmin_d(c) + 0.5 * (c->N4 - c->N3); }
 
+/* ad_coeffs of the precise retry: the same quantities without differences of
+ * long absolute times (the end of the staircase and the centroids taken from
+ * the start of the deceleration, t3). */
+static void ad_coeffs_rel(const sctx *c, double n1, double k, double m, double *K0, double *K1,
+                          double *bend)
+{
+    double g = c->g;
+    double cna = cnum(n1, c->N1, c->N2) / effl(n1, c->N1, c->N2);
+    double cnd = cnum(m, c->N3, c->N4) / effl(m, c->N3, c->N4);
+    double rel = m; /* be - t3 */
+    if (c->last) {
+        rel = dmax2(rel, m + c->N4);
+        rel = dmax2(rel, c->N3);
+        rel = dmax2(rel, c->N2 - k);
+        rel = dmax2(rel, c->N1 - n1 - k);
+        rel = dmax2(rel, c->tail_in - (g + n1 + k));
+    }
+    *K0 = c->vs * (g + cna) + c->ve * (rel - cnd);
+    *K1 = (n1 + k) + (cnd - cna);
+    *bend = (g + n1 + k) + rel;
+}
+
 /* AD structure: D/Te = K0 + vp*K1 for given (possibly fractional) stage lengths. */
 static void ad_coeffs(const sctx *c, double n1, double k, double m, double *K0, double *K1,
                       double *bend)
@@ -297,6 +325,10 @@ static void ad_coeffs(const sctx *c, double n1, double k, double m, double *K0, 
     double cd = t3 + cnum(m, c->N3, c->N4) / ed;
     double send = t3 + m;
     double be = send;
+    if (c->precise) {
+        ad_coeffs_rel(c, n1, k, m, K0, K1, bend);
+        return;
+    }
     if (c->last) {
         be = dmax2(be, send + c->N4);
         be = dmax2(be, t3 + c->N3);
@@ -562,7 +594,8 @@ static int solve_b23(const sctx *c0, int branch, ssol *out)
 }
 
 /* Last resort of the AD structure (v_p above both end velocities): for a peak
- * vt of a grid from v_max down towards max(vs, ve), the stages are sized for
+ * vt of a grid from the continuous optimum (or v_max) down towards
+ * max(vs, ve), the stages are sized for
  * vt and the cruise is found from the distance (fit_ad), instead of rounding
  * the continuous optimum to its neighbours (round_ad).  Rounding can fail
  * when a stage is far shorter than its jerk times (short_stage = 2 with
@@ -572,12 +605,14 @@ static int solve_b23(const sctx *c0, int branch, ssol *out)
  * the cruise rounded up, v_p <= vt and each level <= its limit. */
 static int solve_fit(const sctx *c0, ssol *out)
 {
-    double lo = dmax2(c0->vs, c0->ve), hi = c0->vm;
+    double lo = dmax2(c0->vs, c0->ve), hi = c0->vm, vc, kx;
     int p, q;
     out->ok = 0;
     if (!(lo < hi)) return 0;
+    /* from the continuous optimum (the limits at their most) down */
+    if (cont_solve(c0, lo, hi, &vc, &kx) && vc > lo) hi = vc;
     for (p = 0; p <= 96; p++) {
-        double vt = lo + (hi - lo) * exp2(-p / 4.0); /* v_max .. 1e-7 (v_max - lo) above lo */
+        double vt = lo + (hi - lo) * exp2(-p / 4.0); /* hi .. 1e-7 (hi - lo) above lo */
         sctx c = *c0;
         int mergedA = 0, mergedD = 0;
         if (!(vt > lo)) break;
@@ -675,6 +710,9 @@ static int solve_pinned(const sctx *c, ssol *s, double *resid, double *dmin)
     D1 = pinned_D(c, s, 1000000, &be);
     kr = 1000000.0 - (D1 - c->D) / (vlo * c->Te);
     if (kr < -0.5 && c->D < D0) return 0;
+    /* a cruise longer than a plan may hold (a speed far too low for the
+     * distance): not this way */
+    if (!(kr < (double)DJL_MAX_MOTION_SAMPLES)) return 0;
     kk[0] = kr <= 0.0 ? 0 : (int64_t)floor(kr);
     kk[1] = kr <= 0.0 ? 0 : ceil_len(kr);
     k = 0;
@@ -754,6 +792,7 @@ static int solve_split(const sctx *c, ssol *out)
         if (!solve_pinned(c, &pin, &resid, &dmin)) return 0;
         kr = (double)pin.k + resid / (vlo * c->Te);
     }
+    if (!(kr < (double)DJL_MAX_MOTION_SAMPLES)) return 0;
     kf = kr < 0.0 ? 0 : (int64_t)floor(kr);
     for (after = 0; after < 2; after++)
         for (split = 0; split < 2; split++)
@@ -831,14 +870,18 @@ typedef struct {
     int n_steps;
     int64_t bnd[DJL_MAX_PIECES + 8];
     int lead;       /* DJL: a segment's first stage waits for the previous ramps (sctx.g) */
+    const djl_params *user; /* the user's parameters (messages) */
+    int kl;         /* lengths in units of 2^kl m (djl_plan_motion's rescaled retry) */
 } work_t;
 
 /* Error for segment i, planned in the frame of its direction with the
  * distance c->D (the user's distance plus what the rounding of the earlier
  * segments passed on); dmin is the shortest distance that frame allows. */
 static djl_status infeasible(djl_error *err, const djl_params *p, int i, const sctx *c,
-                             double dmin)
+                             double dmin, int kl)
 {
+    /* p: the user's parameters; c in units of 2^kl m (djl_plan_motion's
+     * rescaled retry; kl = 0 otherwise): lengths are printed converted */
     char dname[40], left[120] = "";
     double D = p->n_segments == 0 ? p->distance : p->seg_distance[i];
     double vs = (p->n_segments == 0 || i == 0 ? p->v0 : p->seg_v_end[i - 1]) + 0.0; /* no -0 */
@@ -859,14 +902,14 @@ static djl_status infeasible(djl_error *err, const djl_params *p, int i, const s
                          "%s = %g m from %g m/s to %g m/s (v_max = %g m/s, a_max = %g m/s2, "
                          "d_max = %g m/s2, Te = %g s): the planner found no profile landing "
                          "exactly on a sample although one should exist; please report it",
-                         dname, D, vs, ve, c->vm, c->am, c->dm, c->Te);
+                         dname, D, vs, ve, p->v_max, p->a_max, p->d_max, p->Te);
     if (c->last && c->ve != 0.0 && c->D >= dmin) {
         /* beyond the minimum, room for a dip worth one sample of travel at v
          * (area a t^2/4 in a time t) and for the jerk times of its stages:
          * an estimate the randomised C driver checks (in the user's terms:
          * the residual carried in counts) */
         double v = dmax2(c->vs, c->ve);
-        double room = dmin + fabs(D) - c->D +
+        double room = dmin + ldexp(fabs(D), kl) - c->D +
                       v * (2.0 * sqrt(v * c->Te / dmin2(c->am, c->dm)) +
                            ((double)c->N1 + c->N2 + c->N3 + c->N4) * c->Te);
         return set_error(err, DJL_E_INFEASIBLE, dname, D,
@@ -875,23 +918,26 @@ static djl_status infeasible(djl_error *err, const djl_params *p, int i, const s
                          "Te = %g s, the jerk times): the minimum is about %g m and from about "
                          "%g m on every distance lands, only some in between (they need room "
                          "for a speed dip); use a longer distance, or end at rest",
-                         dname, D, ve, vs, c->vm, c->am, c->dm, c->Te, dmin, room);
+                         dname, D, ve, vs, p->v_max, p->a_max, p->d_max, p->Te, ldexp(dmin, -kl),
+                         ldexp(room, -kl));
     }
-    if (fabs(c->D - fabs(D)) > 1e-12 * (fabs(D) + fabs(dmin)))
+    dmin = ldexp(dmin, -kl);
+    if (fabs(ldexp(c->D, -kl) - fabs(D)) > 1e-12 * (fabs(D) + fabs(dmin)))
         snprintf(left, sizeof left, "; rounding the earlier segments to whole samples left it %g m",
-                 c->D);
+                 ldexp(c->D, -kl));
     if (c->vs == c->ve && c->vs > 0.0)
         return set_error(err, DJL_E_INFEASIBLE, dname, D,
                          "%s = %g m cannot end exactly on a sample cruising at %g m/s (v_max = %g "
                          "m/s, a_max = %g m/s2, d_max = %g m/s2, Te = %g s, the jerk times): a "
                          "pure cruise covers whole samples of %g m, landing in between needs a "
                          "speed dip, and a dip needs about %g m or more%s",
-                         dname, D, ve, c->vm, c->am, c->dm, c->Te, c->vs * c->Te, dmin, left);
+                         dname, D, ve, p->v_max, p->a_max, p->d_max, p->Te,
+                         ldexp(c->vs * c->Te, -kl), dmin, left);
     return set_error(err, DJL_E_INFEASIBLE, dname, D,
                      "%s = %g m is too short to go from %g m/s to %g m/s within v_max = %g m/s, "
                      "a_max = %g m/s2, d_max = %g m/s2 and the jerk times at Te = %g s: it needs "
-                     "more than about %g m%s", dname, D, vs, ve, c->vm, c->am, c->dm, c->Te,
-                     dmax2(dmin, 0.0), left);
+                     "more than about %g m%s", dname, D, vs, ve, p->v_max, p->a_max, p->d_max,
+                     p->Te, dmax2(dmin, 0.0), left);
 }
 
 static int segment_absorb(work_t *w, int j, double r_real, int branch)
@@ -946,7 +992,7 @@ static int absorb_into(work_t *w, int j, int L, double r_real, int branch, int64
     return 0;
 }
 
-static djl_status plan_last(work_t *w, const djl_params *p, int n, djl_error *err)
+static djl_status plan_last(work_t *w, int n, djl_error *err)
 {
     int L = n - 1, j;
     sctx *c = &w->c[L];
@@ -995,7 +1041,7 @@ static djl_status plan_last(work_t *w, const djl_params *p, int n, djl_error *er
             }
     }
     if (solve_fit(c, &w->s[L])) return DJL_OK;
-    return infeasible(err, p, L, c, dmin);
+    return infeasible(err, w->user, L, c, dmin, w->kl);
 }
 
 /* A move that the acceleration limits make longer than a plan may hold.
@@ -1009,9 +1055,11 @@ static djl_status plan_last(work_t *w, const djl_params *p, int n, djl_error *er
  * exceeds DJL_MAX_MOTION_SAMPLES cannot be planned: it is refused here,
  * naming the limit that takes the longer part.  (Computed without overflow:
  * a and d may be 1e-300 or 1e300.) */
-static djl_status check_duration(const djl_params *p, int i, double Dr, double vS, double vE,
-                                 djl_error *err)
+static djl_status check_duration(const djl_params *p, int i, djl_error *err)
 {
+    double Dr = p->n_segments == 0 ? p->distance : p->seg_distance[i];
+    double vE = p->n_segments == 0 ? p->v_e : p->seg_v_end[i];
+    double vS = i == 0 ? p->v0 : p->seg_v_end[i - 1];
     double sg = Dr < 0.0 ? -1.0 : 1.0, D = fabs(Dr), vs = sg * vS, ve = sg * vE, Te = p->Te;
     double am = p->a_max, dm = p->d_max, lim = (double)DJL_MAX_MOTION_SAMPLES * (1.0 + 1e-9);
     double r, h, w, V, vt, na, nd;
@@ -1087,6 +1135,89 @@ static int64_t ramp_tail_after(const work_t *w, int64_t t)
     return tail;
 }
 
+/* Exact-mode state at sample b (see walk_pieces): the velocity from the
+ * plateau of the last phase that has settled (with every phase before it),
+ * plus what the phases after it have brought so far; the acceleration from
+ * the phases under way.  A phase of two steps +A, -A is evaluated as a
+ * whole, in forms free of the cancellation between its two ramps (long
+ * overlapping ramps of opposite signs differ by little). */
+static double ramp_g1(double u, double N) /* velocity of a unit step, in samples */
+{
+    if (u <= 0.0) return 0.0;
+    if (u >= N) return u - 0.5 * N;
+    return 0.5 * u * u / N;
+}
+
+static double ramp_r(double u, double N) /* acceleration of a unit step */
+{
+    if (u < 0.0) return 0.0;
+    if (u >= N) return 1.0;
+    return u / N;
+}
+
+/* Acceleration (*a, per unit) and velocity (*dv, per unit and Te) the steps
+ * q0..q1 of one phase have brought at sample b. */
+static void phase_state(const work_t *w, int q0, int q1, int64_t b, double *a, double *dv)
+{
+    int r;
+    *a = 0.0;
+    *dv = 0.0;
+    if (q1 == q0 + 1 && w->step[q1].A == -w->step[q0].A) {
+        double A = w->step[q0].A, Na = w->step[q0].N, Nb = w->step[q1].N;
+        double ua = (double)(b - w->step[q0].tau), ub = (double)(b - w->step[q1].tau);
+        double n = ua - ub; /* whole samples: exact */
+        if (ub < 0.0) { /* second step still to come */
+            *a = A * ramp_r(ua, Na);
+            *dv = A * ramp_g1(ua, Na);
+        } else if (ua >= Na && ub >= Nb) { /* over: the phase's velocity jump */
+            *dv = A * (n + 0.5 * (Nb - Na));
+        } else if (ua >= Na) { /* first ramp over, second running */
+            *a = A * ((Nb - ub) / Nb);
+            *dv = A * (n + 0.5 * (Nb - Na) - 0.5 * (Nb - ub) * (Nb - ub) / Nb);
+        } else if (ub >= Nb) { /* second ramp (the shorter) over, first running */
+            *a = -A * ((Na - ua) / Na);
+            *dv = A * (n + 0.5 * (Nb - Na) + 0.5 * (Na - ua) * (Na - ua) / Na);
+        } else if (Na == Nb) { /* both running, same length */
+            *a = A * (n / Na);
+            *dv = A * (n * (ua + ub) / (2.0 * Na));
+        } else {
+            *a = A * (ua / Na - ub / Nb);
+            *dv = A * (0.5 * ua * ua / Na - 0.5 * ub * ub / Nb);
+        }
+        return;
+    }
+    for (r = q0; r <= q1; r++) {
+        double u = (double)(b - w->step[r].tau), N = w->step[r].N;
+        *a += w->step[r].A * ramp_r(u, N);
+        *dv += w->step[r].A * ramp_g1(u, N);
+    }
+}
+
+static void exact_state(const work_t *w, int64_t b, double v0, double Te, double *a_out,
+                        double *v_out)
+{
+    int q = 0, r, settled = 1;
+    double a = 0.0, v = v0, dv = 0.0;
+    while (q < w->n_steps && w->step[q].tau <= b) {
+        int q0 = q, over = 1;
+        while (q + 1 < w->n_steps && !w->step[q].phase_end) q++; /* q: the phase's last step */
+        for (r = q0; r <= q; r++)
+            if (b < w->step[r].tau + w->step[r].N) over = 0;
+        if (over && settled) {
+            v = w->step[q].v_after; /* every phase up to this one has settled */
+        } else {
+            double pa, pv;
+            settled = 0;
+            phase_state(w, q0, q, b, &pa, &pv);
+            if (!over) a += pa;
+            dv += pv;
+        }
+        q++;
+    }
+    *a_out = a;
+    *v_out = v + Te * dv;
+}
+
 /* Walk the pieces: jerk summed afresh on every piece, state carried from
  * piece to piece in closed form; where no ramp is running the acceleration is
  * the AL level exactly, and where that level is 0 the velocity is the plateau
@@ -1128,29 +1259,9 @@ static djl_status walk_pieces(const work_t *w, djl_plan *plan, const djl_params 
         }
         if (quiet) a = level;
         if (quiet && level == 0.0) v = vsnap;
-        if (exact && !quiet) {
-            /* from the steps: the completed ramps (in order, so that those of
-             * a phase cancel exactly) and the running ones in part; the
-             * velocity from the plateau of the last phase whose ramps are all
-             * over, plus the steps after it */
-            int P = -1;
-            double vP = p->v0;
-            a = 0.0;
-            for (q = 0; q < w->n_steps && w->step[q].tau <= b; q++) {
-                const step_t *sq = &w->step[q];
-                a += b >= sq->tau + sq->N ? sq->A : sq->A * ((double)(b - sq->tau) / sq->N);
-            }
-            for (q = 0; q < w->n_steps && b >= w->step[q].tau + w->step[q].N; q++)
-                if (w->step[q].phase_end) {
-                    P = q;
-                    vP = w->step[q].v_after;
-                }
-            v = vP;
-            for (q = P + 1; q < w->n_steps && w->step[q].tau <= b; q++) {
-                const step_t *sq = &w->step[q];
-                double u = (double)(b - sq->tau), N = (double)sq->N;
-                v += sq->A * p->Te * (u >= N ? u - 0.5 * N : 0.5 * u * u / N);
-            }
+        if (exact && !(quiet && level == 0.0)) {
+            exact_state(w, b, p->v0, p->Te, &a, &v);
+            if (quiet) a = level;
         }
         if (level == 0.0) val = vsnap;
         if (b >= plan->k_end) {
@@ -1189,7 +1300,11 @@ static djl_status walk_pieces(const work_t *w, djl_plan *plan, const djl_params 
     return DJL_OK;
 }
 
-djl_status djl_plan_motion(const djl_params *p, djl_plan *plan, djl_error *err)
+/* Plan validated parameters p; precise: the retries of djl_plan_motion (see
+ * there), p then possibly the user's parameters in units of 2^kl m and some
+ * power of two of seconds (user: the user's, for messages). */
+static djl_status plan_once(const djl_params *p, const djl_params *user, int kl, djl_plan *plan,
+                            djl_error *err, int precise)
 {
     static const double tolx = 1e-11;
     work_t w;
@@ -1200,10 +1315,10 @@ djl_status djl_plan_motion(const djl_params *p, djl_plan *plan, djl_error *err)
     int64_t S;
 
     if (err) memset(err, 0, sizeof(*err));
-    if ((st = djl_validate(p, err)) != DJL_OK) return st;
-
     memset(plan, 0, sizeof(*plan));
     memset(&w, 0, sizeof(w));
+    w.user = user;
+    w.kl = kl;
     plan->p = *p;
 
     for (i = 0; i < 4; i++) {
@@ -1225,7 +1340,7 @@ djl_status djl_plan_motion(const djl_params *p, djl_plan *plan, djl_error *err)
     }
     plan->v_target = w.vE[n - 1];
     for (i = 0; i < n; i++)
-        if ((st = check_duration(p, i, w.Dreal[i], w.vS[i], w.vE[i], err)) != DJL_OK) return st;
+        if ((st = check_duration(user, i, err)) != DJL_OK) return st;
 
     /* Forward pass: each segment is planned time-optimally and exactly when
      * it can; a segment pinned at a velocity it cannot leave (pure cruise,
@@ -1250,6 +1365,7 @@ djl_status djl_plan_motion(const djl_params *p, djl_plan *plan, djl_error *err)
         c->N2 = N[1];
         c->N3 = N[2];
         c->N4 = N[3];
+        c->precise = precise;
         /* DJL: ramps with different filters must not overlap across a
          * boundary (their lags differ, the velocities would add up above
          * v_max); JL ramps may, the output then being a moving average of
@@ -1271,13 +1387,13 @@ djl_status djl_plan_motion(const djl_params *p, djl_plan *plan, djl_error *err)
             }
             if (solve_b23(c, 2, s) || solve_b23(c, 3, s)) continue;
             if (solve_fit(c, s)) continue;
-            return infeasible(err, p, i, c, dmin);
+            return infeasible(err, user, i, c, dmin, kl);
         }
     }
 
     /* The last segment must land exactly. */
     if (!w.empty[n - 1] && !w.s[n - 1].ok) {
-        st = plan_last(&w, p, n, err);
+        st = plan_last(&w, n, err);
         if (st != DJL_OK) return st;
     }
 
@@ -1357,9 +1473,9 @@ djl_status djl_plan_motion(const djl_params *p, djl_plan *plan, djl_error *err)
         if (tail > kend) kend = tail;
         if (S > kend) kend = S;
         if ((double)kend > (double)DJL_MAX_MOTION_SAMPLES)
-            return set_error(err, DJL_E_INFEASIBLE, "Te", p->Te,
+            return set_error(err, DJL_E_INFEASIBLE, "Te", user->Te,
                              "the motion would last %g samples of Te = %g s: more than the %g "
-                             "a plan may hold", (double)kend, p->Te,
+                             "a plan may hold", (double)kend, user->Te,
                              (double)DJL_MAX_MOTION_SAMPLES);
         plan->k_end = kend;
     }
@@ -1386,8 +1502,184 @@ djl_status djl_plan_motion(const djl_params *p, djl_plan *plan, djl_error *err)
      * alone reaches 1e-11 of the distance, hence the wider tolerance (still a
      * hundredth of the 1e-9 promised). */
     st = walk_pieces(&w, plan, p, n, nb, tolx, scale, 0, err);
-    if (st != DJL_OK) st = walk_pieces(&w, plan, p, n, nb, 10.0 * tolx, scale, 1, err);
+    if (st != DJL_OK) {
+        st = walk_pieces(&w, plan, p, n, nb, 10.0 * tolx, scale, 1, err);
+        if (st == DJL_OK && err) memset(err, 0, sizeof(*err));
+    }
     return st;
+}
+
+/* Every value of the plan finite, and no quantity (x, v, a, j, x_al, v_al,
+ * a_al) whose largest magnitude over the pieces is a subnormal double: its
+ * values would have lost their digits (smaller values of a quantity that
+ * also has normal ones, rounding residues, are harmless). */
+static int plan_clean(const djl_plan *pl)
+{
+    double big[7] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    int i, q;
+    for (i = 0; i < pl->n_pieces; i++) {
+        const djl_piece *pc = &pl->piece[i];
+        double val[7];
+        val[0] = pc->x;
+        val[1] = pc->v;
+        val[2] = pc->a;
+        val[3] = pc->j;
+        val[4] = pc->x_al;
+        val[5] = pc->v_al;
+        val[6] = pc->a_al;
+        for (q = 0; q < 7; q++) {
+            if (!isfinite(val[q])) return 0;
+            big[q] = dmax2(big[q], fabs(val[q]));
+        }
+    }
+    for (q = 0; q < 7; q++)
+        if (big[q] != 0.0 && big[q] < DJL_MIN_MAGNITUDE) return 0;
+    return 1;
+}
+
+/* Units in which the problem is ordinary: lengths in 2^-kl m (the total
+ * distance about 1), times in 2^-kt s (Te about 1 ms).  Returns 1 if the
+ * user's units are far from them (a length, speed, acceleration or jerk unit
+ * beyond 2^600 ~ 1e180 either way): only then can values of the plan leave
+ * the range of normal doubles, floating point being otherwise exactly the
+ * same in units that differ by powers of two. */
+static int units(const djl_params *p, int *kl, int *kt)
+{
+    double sum = 0.0;
+    int i, n = p->n_segments == 0 ? 1 : p->n_segments;
+    for (i = 0; i < n; i++) sum += fabs(p->n_segments == 0 ? p->distance : p->seg_distance[i]);
+    *kt = -ilogb(p->Te) - 10;
+    *kl = sum > 0.0 ? -ilogb(sum) : -(ilogb(p->v_max) + ilogb(p->Te));
+    for (i = 0; i < 4; i++) /* length, speed, acceleration, jerk */
+        if (*kl - i * *kt > 600 || *kl - i * *kt < -600) return 1;
+    return 0;
+}
+
+/* The problem planned in the units of units() (powers of two: every
+ * conversion exact), then converted back. */
+static djl_status plan_scaled(const djl_params *p, int kl, int kt, djl_plan *plan, djl_error *err)
+{
+    djl_params q = *p;
+    djl_status st;
+    double big = 0.0;
+    int i, n = p->n_segments == 0 ? 1 : p->n_segments, Nmin = 0;
+    int ev = kl - kt, ea = kl - 2 * kt, ej = kl - 3 * kt; /* m/s, m/s^2, m/s^3 */
+    q.Te = ldexp(p->Te, kt);
+    for (i = 0; i < 4; i++) q.T_F[i] = ldexp(p->T_F[i], kt);
+    q.x0 = 0.0;
+    q.distance = ldexp(p->distance, kl);
+    q.v0 = ldexp(p->v0, ev);
+    q.v_e = ldexp(p->v_e, ev);
+    q.v_max = ldexp(p->v_max, ev);
+    q.a_max = ldexp(p->a_max, ea);
+    q.d_max = ldexp(p->d_max, ea);
+    for (i = 0; i < DJL_MAX_SEGMENTS; i++) {
+        q.seg_distance[i] = ldexp(p->seg_distance[i], kl);
+        q.seg_v_end[i] = ldexp(p->seg_v_end[i], ev);
+    }
+    /* the parameters must survive the change of units (they may span more
+     * than a double's range between them) */
+    if (djl_validate(&q, NULL) != DJL_OK) return DJL_E_INTERNAL;
+    st = plan_once(&q, p, kl, plan, err, 1);
+    if (st != DJL_OK) return st;
+    /* back to the user's units */
+    plan->p = *p;
+    plan->x_target = 0.0;
+    for (i = 0; i < n; i++) plan->x_target += p->n_segments == 0 ? p->distance : p->seg_distance[i];
+    plan->v_target = p->n_segments == 0 ? p->v_e : p->seg_v_end[n - 1];
+    plan->v_reached = ldexp(plan->v_reached, -ev);
+    plan->a_reached = ldexp(plan->a_reached, -ea);
+    plan->d_reached = ldexp(plan->d_reached, -ea);
+    for (i = 0; i < plan->n_segments; i++) {
+        djl_segment_plan *sp = &plan->seg[i];
+        sp->v_peak = ldexp(sp->v_peak, -ev);
+        sp->a_level = ldexp(sp->a_level, -ea);
+        sp->d_level = ldexp(sp->d_level, -ea);
+        sp->distance = ldexp(sp->distance, -kl);
+    }
+    for (i = 0; i < plan->n_pieces; i++) {
+        djl_piece *pc = &plan->piece[i];
+        pc->x = ldexp(pc->x, -kl);
+        pc->v = ldexp(pc->v, -ev);
+        pc->a = ldexp(pc->a, -ea);
+        pc->j = ldexp(pc->j, -ej);
+        pc->x_al = ldexp(pc->x_al, -kl);
+        pc->v_al = ldexp(pc->v_al, -ev);
+        pc->a_al = ldexp(pc->a_al, -ea);
+        big = dmax2(big, fabs(pc->j));
+    }
+    plan->piece[plan->n_pieces - 1].v = plan->v_target;
+    if (isfinite(big) && !plan_clean(plan)) {
+        /* values of the motion itself below the normal doubles: it is too
+         * small to be planned exactly at these time scales */
+        char name[40];
+        double D = p->distance, tiny = 0.0;
+        int at = 0;
+        if (p->n_segments == 0)
+            snprintf(name, sizeof name, "distance");
+        else {
+            for (i = 0; i < n; i++)
+                if (p->seg_distance[i] != 0.0 && (tiny == 0.0 || fabs(p->seg_distance[i]) < tiny)) {
+                    tiny = fabs(p->seg_distance[i]);
+                    at = i;
+                }
+            D = p->seg_distance[at];
+            snprintf(name, sizeof name, "seg_distance[%d]", at + 1);
+        }
+        return set_error(err, DJL_E_INFEASIBLE, name, D,
+                         "%s = %g m is too small for the time scales of this motion (Te = %g s, "
+                         "the jerk times, v_max = %g m/s, a_max = %g m/s2, d_max = %g m/s2): "
+                         "values of its plan (the jerk first) would be below the smallest normal "
+                         "double, %g, and lose their digits", name, D, p->Te, p->v_max, p->a_max,
+                         p->d_max, DJL_MIN_MAGNITUDE);
+    }
+    if (!isfinite(big)) {
+        /* the jerk (a level over a jerk time) beyond a double */
+        char name[40];
+        for (i = 0; i < 4; i++)
+            if (plan->N[i] > 0 && (Nmin == 0 || plan->N[i] < plan->N[Nmin - 1])) Nmin = i + 1;
+        if (Nmin == 0) Nmin = 1;
+        snprintf(name, sizeof name, "T_F%d", Nmin);
+        return set_error(err, DJL_E_INFEASIBLE, name, p->T_F[Nmin - 1],
+                         "%s = %g s: with the accelerations of this motion (a_max = %g m/s2, "
+                         "d_max = %g m/s2) the jerk (an acceleration over a jerk time) exceeds "
+                         "the range of a double", name, p->T_F[Nmin - 1], p->a_max, p->d_max);
+    }
+    return DJL_OK;
+}
+
+djl_status djl_plan_motion(const djl_params *p, djl_plan *plan, djl_error *err)
+{
+    djl_status st, st2;
+    djl_error e2;
+    int precise = 0, kl, kt;
+    if (err) memset(err, 0, sizeof(*err));
+    if ((st = djl_validate(p, err)) != DJL_OK) return st;
+    st = plan_once(p, p, 0, plan, err, 0);
+    if (st == DJL_OK && plan_clean(plan)) return DJL_OK;
+    /* Times are counted in samples from a segment's start; with jerk times
+     * of millions of samples (or stages of billions) the distance formula
+     * then loses digits to the difference of two long times.  A plan that
+     * fails its checks is made again with the formulas taken relative to the
+     * stage they describe (only the plans the first way fails get the
+     * second: the others stay as they are, bit for bit). */
+    if (st == DJL_E_INTERNAL) {
+        precise = 1;
+        st = plan_once(p, p, 0, plan, err, 1);
+        if (st == DJL_OK && plan_clean(plan)) return DJL_OK;
+    }
+    /* Magnitudes far from 1 (1e-300 m, 1e300 m/s^2, Te of 1e-12 s...) lose
+     * digits to subnormal, or overflowing, intermediate values: the same
+     * problem once more, in units where it is ordinary.  Kept if it plans; a
+     * refusal is the first one's (in the user's units, as computed). */
+    if (!units(p, &kl, &kt)) return st;
+    st2 = plan_scaled(p, kl, kt, plan, &e2);
+    if (st2 == DJL_OK || (st2 == DJL_E_INFEASIBLE && st != DJL_E_INFEASIBLE)) {
+        if (err) *err = e2;
+        return st2;
+    }
+    if (st == DJL_OK) return plan_once(p, p, 0, plan, err, precise); /* the plan made above */
+    return st; /* and its message */
 }
 
 /* ------------------------------------------------------------------------ */

@@ -42,9 +42,11 @@ extern "C" {
 #define DJL_MAX_MOTION_SAMPLES 1000000000000000LL
 /* Largest |x0| + sum of |distance| accepted, m (every value of a plan stays finite). */
 #define DJL_MAX_POSITION 1e300
-/* Smallest non-zero |distance| accepted, m: the smallest normal double (DBL_MIN);
- * a subnormal distance has too few significant digits to be planned exactly. */
-#define DJL_MIN_DISTANCE 2.2250738585072014e-308
+/* Smallest magnitude accepted for Te, v_max, a_max, d_max, the jerk times and
+ * a non-zero distance: the smallest normal double, DBL_MIN.  A subnormal value
+ * has too few significant digits to be planned exactly.  (A subnormal speed
+ * is accepted: next to v_max it is 0.) */
+#define DJL_MIN_MAGNITUDE 2.2250738585072014e-308
 
 typedef enum { DJL_PROFILE_AL = 1, DJL_PROFILE_JL = 2, DJL_PROFILE_DJL = 3 } djl_profile;
 

@@ -13,7 +13,8 @@
  *         grid     round numbers: v_max in {1,2,5} 10^k, T_F whole multiples
  *                  of Te (0.512/0.511/0.121/0.007 ...), round distances
  *         extreme  magnitudes over many decades: a classic or grid case
- *                  rescaled in length (1e-9..1e9) and time (1e-6..1e6),
+ *                  rescaled in length (1e-9..1e9, and 1e-300..1e300) and
+ *                  time (1e-6..1e6, and 1e-12..1e8),
  *                  a_max / d_max down to 1e-30, subnormal and tiny distances,
  *                  x0 near 1e300, segment sums near DJL_MAX_POSITION, jerk
  *                  times up to the longest filter, 32 segments
@@ -156,7 +157,7 @@ static void rescale(djl_params *p, double L, double T)
 
 static void extreme_params(djl_params *p)
 {
-    int i, n, kind = irand(8);
+    int i, n, kind = irand(10);
     if (urand() < 0.5)
         classic_params(p);
     else
@@ -217,11 +218,15 @@ static void extreme_params(djl_params *p)
             if (urand() < 0.3) p->x0 = sgn * DJL_MAX_POSITION * 0.5 * urand();
         }
         break;
+    case 8: /* lengths of any size a double holds, times from ps to years */
+        rescale(p, pow(10.0, -300.0 + 600.0 * urand()), pow(10.0, -12.0 + 20.0 * urand()));
+        break;
     case 6: /* jerk times far longer than the stages, up to the longest filter */
         for (i = 0; i < 4; i++)
             if (urand() < 0.6)
                 p->T_F[i] = p->Te * floor(log_uniform(1.0, (double)DJL_MAX_FILTER_SAMPLES));
         break;
+    case 9:
     default: /* many segments, speeds of all sizes */
         n = 1 + irand(DJL_MAX_SEGMENTS);
         {
@@ -277,13 +282,15 @@ static double total_abs(const djl_params *p)
     return d;
 }
 
+/* All segments one way (a segment of 0 m may move either way: it takes up
+ * what the rounding of the segment before it left). */
 static int one_direction(const djl_params *p)
 {
     int i, pos = 0, neg = 0;
     if (p->n_segments == 0) return 1;
     for (i = 0; i < p->n_segments; i++) {
-        pos |= p->seg_distance[i] > 0.0;
-        neg |= p->seg_distance[i] < 0.0;
+        pos |= p->seg_distance[i] >= 0.0;
+        neg |= p->seg_distance[i] <= 0.0;
     }
     return !(pos && neg);
 }
@@ -298,8 +305,9 @@ static int finite_sample(const djl_sample *s)
 
 /* Limits checked on the pieces themselves (exact: a is linear on a piece, v
  * quadratic with its extremum where a vanishes), continuity from piece to
- * piece, the jerk bound, then the evaluator on samples near every piece
- * boundary and on a few hundred others, the end state. */
+ * piece, the jerk bound, then the evaluator on the samples either side of
+ * every piece boundary and on every sample of a motion up to 5000 samples
+ * long (500 spread over a longer one), the end state. */
 static void check_plan(long cs, const djl_params *p)
 {
     djl_sample s;
@@ -310,12 +318,21 @@ static void check_plan(long cs, const djl_params *p)
     double amx = fmax(p->a_max, p->d_max), jmax, xs = fmax(total_abs(p), p->v_max * Te);
     /* limits up to the rounding of the larger one (a_max and d_max may be
      * decades apart) */
-    double amax = p->a_max * tol + 1e-12 * amx, dmax = p->d_max * tol + 1e-12 * amx;
+    double amax = p->a_max * tol + 1e-12 * amx, dmax = p->d_max * tol + 1e-12 * amx, vlim;
     int oned = one_direction(p);
     int64_t k, K = plan.k_end;
 
     for (q = 0; q < 4; q++)
         if (plan.N[q] > 0 && (Nmin == 0 || plan.N[q] < Nmin)) Nmin = plan.N[q];
+    /* v_max up to rounding: the jerk of a piece is a sum of ramps that may
+     * cancel (a few ulps of a/T_F left), and integrated over a piece of
+     * millions of samples that moves v by up to about eps a L */
+    {
+        double Lmax = 0.0;
+        for (i = 0; i + 1 < plan.n_pieces; i++)
+            Lmax = fmax(Lmax, (double)(plan.piece[i + 1].k - plan.piece[i].k) * Te);
+        vlim = p->v_max * tol + 4.0 * DBL_EPSILON * amx * Lmax;
+    }
     /* every stage ramps at (its level)/T_F; where ramps meet (the paper's
      * overlap, ramps 2+3 merged, JL across segments) the jerk is a change of
      * acceleration within the limits over a jerk time */
@@ -338,7 +355,7 @@ static void check_plan(long cs, const djl_params *p)
             return;
         }
         if (i > 0 && pc->k <= plan.piece[i - 1].k) FAIL("case %ld: pieces out of order", cs);
-        if (fabs(pc->v) > p->v_max * tol)
+        if (fabs(pc->v) > vlim)
             FAIL("case %ld: piece %d: |v| = %.17g > v_max = %.17g", cs, i, pc->v, p->v_max);
         if (oned ? (sg * pc->a > amax || -sg * pc->a > dmax)
                  : fabs(pc->a) > amx * tol)
@@ -357,18 +374,22 @@ static void check_plan(long cs, const djl_params *p)
         ae = pc->a + L * pc->j;
         ve_ = pc->v + L * (pc->a + 0.5 * L * pc->j);
         xe = pc->x + L * (pc->v + L * (0.5 * pc->a + L * pc->j / 6.0));
-        if (pc->j != 0.0) {
+        if (pc->j != 0.0) { /* the samples either side of the velocity's extremum */
             sx = -pc->a / pc->j;
-            if (sx > 0.0 && sx < L &&
-                fabs(pc->v + sx * (pc->a + 0.5 * sx * pc->j)) > p->v_max * tol)
-                FAIL("case %ld: piece %d: |v| peaks above v_max inside the piece", cs, i);
+            if (sx > 0.0 && sx < L) {
+                double s0 = floor(sx / Te) * Te, s1 = s0 + Te;
+                if (fabs(pc->v + s0 * (pc->a + 0.5 * s0 * pc->j)) > vlim ||
+                    (s1 < L && fabs(pc->v + s1 * (pc->a + 0.5 * s1 * pc->j)) > vlim))
+                    FAIL("case %ld: piece %d: |v| peaks above v_max inside the piece", cs, i);
+            }
         }
         if (oned ? (sg * ae > amax || -sg * ae > dmax) : fabs(ae) > amx * tol)
             FAIL("case %ld: piece %d: a = %.17g at its end outside the limits", cs, i, ae);
         /* the planner carries the state from piece to piece in closed form
-         * and snaps it to the AL level / plateau where no ramp runs */
-        if ((Nmin && fabs(ae - plan.piece[i + 1].a) > 1e-9 * amx) || /* AL: steps */
-            fabs(ve_ - plan.piece[i + 1].v) > 1e-9 * p->v_max ||
+         * and snaps it to the AL level / plateau where no ramp runs (pieces
+         * of 1e8 samples and more: rounding grows with their length) */
+        if ((Nmin && fabs(ae - plan.piece[i + 1].a) > 1e-8 * amx) || /* AL: steps */
+            fabs(ve_ - plan.piece[i + 1].v) > 1e-8 * p->v_max ||
             fabs(xe - plan.piece[i + 1].x) > 1e-9 * xs)
             FAIL("case %ld: piece %d -> %d not continuous: a %.17g/%.17g v %.17g/%.17g "
                  "x %.17g/%.17g", cs, i, i + 1, ae, plan.piece[i + 1].a, ve_,
@@ -384,21 +405,21 @@ static void check_plan(long cs, const djl_params *p)
                 FAIL("case %ld: non-finite output at sample %lld", cs, (long long)k);
                 return;
             }
-            if (fabs(s.v) > p->v_max * tol)
+            if (fabs(s.v) > vlim)
                 FAIL("case %ld: |v| = %.17g > v_max = %.17g", cs, s.v, p->v_max);
             if ((k >= K) != (s.done != 0)) FAIL("case %ld: done flag wrong at %lld", cs,
                                                 (long long)k);
         }
     }
     {
-        int64_t step = K > 300 ? K / 300 + 1 : 1;
+        int64_t step = K > 5000 ? K / 500 + 1 : 1; /* short motions: every sample */
         for (k = 0; k <= K; k += step) {
             djl_eval(&plan, (double)k, &cur, &s);
             if (!finite_sample(&s)) {
                 FAIL("case %ld: non-finite output at sample %lld", cs, (long long)k);
                 return;
             }
-            if (fabs(s.v) > p->v_max * tol)
+            if (fabs(s.v) > vlim)
                 FAIL("case %ld: |v| = %.17g > v_max = %.17g", cs, s.v, p->v_max);
             if (oned && (sg * s.a > amax || -sg * s.a > dmax))
                 FAIL("case %ld: a = %.17g outside [-d_max, a_max] = [%g, %g]", cs, s.a, -p->d_max,
@@ -431,20 +452,31 @@ static void check_plan(long cs, const djl_params *p)
 static double rest_to_rest_time(const djl_params *p)
 {
     double D = fabs(p->distance), a = p->a_max, d = p->d_max, v = p->v_max;
-    double vt = sqrt(2.0 * D / (1.0 / a + 1.0 / d));
+    double h = fmin(a, d) / (1.0 + fmin(a, d) / fmax(a, d)); /* a d / (a + d) */
+    double vt = sqrt(2.0 * D) * sqrt(h);
     if (vt <= v) return vt / a + vt / d;
     return D / v + 0.5 * v / a + 0.5 * v / d;
 }
 
 /* The documented limits a plan may run into without either parameter
- * being out of its own domain. */
+ * being out of its own domain: a motion of more than DJL_MAX_MOTION_SAMPLES
+ * samples (10x margin: the estimate is a bound), a jerk (an acceleration over
+ * a jerk time) beyond the range of a double, or near its bottom (about
+ * distance / time^3). */
 static int beyond_documented_limits(const djl_params *p)
 {
-    double T = 0.0;
+    double T = 0.0, Nmin = 0.0;
     int i;
-    for (i = 0; i < 4; i++) T += p->T_F[i];
-    /* a motion of more than 1e15 samples (10x margin: the estimate is a bound) */
-    return (rest_to_rest_time(p) + T) / p->Te > 1e14;
+    for (i = 0; i < 4; i++) {
+        double N = floor(p->T_F[p->profile == DJL_PROFILE_DJL ? i : 0] / p->Te + 0.5);
+        T += p->T_F[i];
+        if (p->profile != DJL_PROFILE_AL && (Nmin == 0.0 || N < Nmin)) Nmin = N;
+    }
+    if (Nmin > 0.0 && fmax(p->a_max, p->d_max) / (Nmin * p->Te) > 0.5 * DBL_MAX) return 1;
+    /* a jerk near the bottom of the normal doubles (the plan would lose digits) */
+    T += rest_to_rest_time(p);
+    if (fabs(p->distance) / T / T / T < ldexp(DBL_MIN, 60)) return 1;
+    return T / p->Te > 1e14;
 }
 
 /* The parameters of a failing case, to reproduce it. */
@@ -516,10 +548,12 @@ int main(int argc, char **argv)
                 double vm = p.v_max, room = 4.0 * p.Te, dip = 0.0;
                 int k;
                 for (k = 0; k < 4; k++) room += p.T_F[k];
-                if (p.v_e != 0.0) dip = 2.0 * vm * sqrt(vm * p.Te / fmin(p.a_max, p.d_max));
-                if (fabs(p.distance) >= 2.0 * ((vm * vm - p.v0 * p.v0) / (2.0 * p.a_max) +
-                                               (vm * vm - p.v_e * p.v_e) / (2.0 * p.d_max)) +
-                                            2.0 * vm * room + 2.0 * dip)
+                if (p.v_e != 0.0) dip = 2.0 * vm * sqrt(vm / fmin(p.a_max, p.d_max)) * sqrt(p.Te);
+                /* (written so that no square of a tiny speed underflows) */
+                if (fabs(p.distance) >=
+                    2.0 * ((vm - fabs(p.v0)) / p.a_max * (0.5 * (vm + fabs(p.v0))) +
+                           (vm - fabs(p.v_e)) / p.d_max * (0.5 * (vm + fabs(p.v_e)))) +
+                        2.0 * vm * room + 2.0 * dip)
                     FAIL("case %ld: long single move refused: %s", i, e.message);
             }
             /* the distance from which the message says every distance lands */
