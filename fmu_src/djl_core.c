@@ -593,6 +593,19 @@ static int solve_b23(const sctx *c0, int branch, ssol *out)
     return solve_b23_once(&c, branch, out);
 }
 
+/* The peak v* of the fastest profile from vs to ve over D without a velocity
+ * limit: accelerating at am, then decelerating at dm,
+ *     v*^2 = (dm vs^2 + am ve^2 + 2 D am dm) / (am + dm),
+ * computed without overflow (am and dm may be 1e-300 or 1e300). */
+static double peak_unlimited(double D, double vs, double ve, double am, double dm)
+{
+    double r = 1.0 / (1.0 + dm / am);               /* a / (a + d) */
+    double h = am < dm ? am * (1.0 - r) : dm * r;   /* a d / (a + d) */
+    double w = sqrt(2.0 * D) * sqrt(h);             /* v* from rest to rest */
+    double V = dmax2(dmax2(vs, ve), w);
+    return V * sqrt((1.0 - r) * (vs / V) * (vs / V) + r * (ve / V) * (ve / V) + (w / V) * (w / V));
+}
+
 /* Last resort of the AD structure (v_p above both end velocities): for a peak
  * vt of a grid from the continuous optimum (or v_max) down towards
  * max(vs, ve), the stages are sized for
@@ -608,6 +621,9 @@ static int solve_fit(const sctx *c0, ssol *out)
     double lo = dmax2(c0->vs, c0->ve), hi = c0->vm, vc, kx;
     int p, q;
     out->ok = 0;
+    /* no peak far above what the accelerations reach with no velocity limit
+     * (v_max may be 1e300: a bisection from it would not come down) */
+    hi = dmin2(hi, 2.0 * peak_unlimited(c0->D, c0->vs, c0->ve, c0->am, c0->dm) + lo);
     if (!(lo < hi)) return 0;
     /* from the continuous optimum (the limits at their most) down */
     if (cont_solve(c0, lo, hi, &vc, &kx) && vc > lo) hi = vc;
@@ -1062,14 +1078,10 @@ static djl_status check_duration(const djl_params *p, int i, djl_error *err)
     double vS = i == 0 ? p->v0 : p->seg_v_end[i - 1];
     double sg = Dr < 0.0 ? -1.0 : 1.0, D = fabs(Dr), vs = sg * vS, ve = sg * vE, Te = p->Te;
     double am = p->a_max, dm = p->d_max, lim = (double)DJL_MAX_MOTION_SAMPLES * (1.0 + 1e-9);
-    double r, h, w, V, vt, na, nd;
+    double vt, na, nd;
     char dname[40];
     if (!(D > 0.0)) return DJL_OK;
-    r = 1.0 / (1.0 + dm / am);               /* a / (a + d) */
-    h = am < dm ? am * (1.0 - r) : dm * r;   /* a d / (a + d) */
-    w = sqrt(2.0 * D) * sqrt(h);             /* v* from rest to rest */
-    V = dmax2(dmax2(vs, ve), w);
-    vt = V * sqrt((1.0 - r) * (vs / V) * (vs / V) + r * (ve / V) * (ve / V) + (w / V) * (w / V));
+    vt = peak_unlimited(D, vs, ve, am, dm);
     if (vt >= vs && vt >= ve) {
         na = (vt - vs) / am / Te;
         nd = (vt - ve) / dm / Te;

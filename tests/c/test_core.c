@@ -17,7 +17,8 @@
  *                  time (1e-6..1e6, and 1e-12..1e8),
  *                  a_max / d_max down to 1e-30, subnormal and tiny distances,
  *                  x0 near 1e300, segment sums near DJL_MAX_POSITION, jerk
- *                  times up to the longest filter, 32 segments
+ *                  times up to the longest filter, 32 segments, a limit far
+ *                  above what the motion reaches (v_max up to 1e300 m/s)
  *         all      (default) each case drawn from one of the three above
  */
 #include <float.h>
@@ -157,7 +158,7 @@ static void rescale(djl_params *p, double L, double T)
 
 static void extreme_params(djl_params *p)
 {
-    int i, n, kind = irand(10);
+    int i, n, kind = irand(11);
     if (urand() < 0.5)
         classic_params(p);
     else
@@ -216,6 +217,15 @@ static void extreme_params(djl_params *p)
              * enough to keep the sample counts in range */
             rescale(p, target / tot, urand() < 0.5 ? 1.0 : 1e6);
             if (urand() < 0.3) p->x0 = sgn * DJL_MAX_POSITION * 0.5 * urand();
+        }
+        break;
+    case 10: /* one limit far above what the motion reaches (v_max 1e300 m/s...) */
+        {
+            double f = pow(10.0, 300.0 * urand() * urand());
+            int which = irand(3);
+            if (which == 0) p->v_max = fmin(p->v_max * f, DBL_MAX);
+            if (which == 1 || urand() < 0.3) p->a_max = fmin(p->a_max * f, DBL_MAX);
+            if (which == 2 || urand() < 0.3) p->d_max = fmin(p->d_max * f, DBL_MAX);
         }
         break;
     case 8: /* lengths of any size a double holds, times from ps to years */
@@ -479,6 +489,62 @@ static int beyond_documented_limits(const djl_params *p)
     return T / p->Te > 1e14;
 }
 
+/* The cases of issue #10 item 6, every run. */
+static void issue_cases(void)
+{
+    djl_params p;
+    djl_error e;
+    djl_status st;
+    int i, sgn;
+    for (sgn = -1; sgn <= 1; sgn += 2) { /* rest-to-rest, the rounding missed it */
+        djl_params_default(&p);
+        p.short_stage = DJL_SHORT_OVERLAP;
+        p.v_max = 0.002;
+        p.a_max = p.d_max = 1.0;
+        p.T_F[0] = 0.512;
+        p.T_F[1] = 0.511;
+        p.T_F[2] = 0.121;
+        p.T_F[3] = 0.007;
+        p.distance = sgn * 0.02;
+        if ((st = djl_plan_motion(&p, &plan, &e)) != DJL_OK)
+            FAIL("issue case 1 (distance %g): %s", p.distance, e.message);
+        else
+            check_plan(-1, &p);
+    }
+    djl_params_default(&p); /* more samples than a plan holds */
+    p.a_max = 1e-26;
+    p.distance = 1.0;
+    st = djl_plan_motion(&p, &plan, &e);
+    if (st != DJL_E_INFEASIBLE || strcmp(e.param, "a_max") != 0)
+        FAIL("issue case 2: %s %s: %s", djl_status_name(st), e.param, e.message);
+    p.distance = 1e-12; /* the same a_max plans a short enough move */
+    if ((st = djl_plan_motion(&p, &plan, &e)) != DJL_OK)
+        FAIL("issue case 2 (1e-12 m): %s", e.message);
+    else
+        check_plan(-1, &p);
+    djl_params_default(&p); /* subnormal distance */
+    p.distance = 4e-320;
+    st = djl_plan_motion(&p, &plan, &e);
+    if (st != DJL_E_PARAM || strcmp(e.param, "distance") != 0)
+        FAIL("issue case 3: %s %s: %s", djl_status_name(st), e.param, e.message);
+    djl_params_default(&p); /* positions beyond a double's comfort */
+    p.n_segments = DJL_MAX_SEGMENTS;
+    for (i = 0; i < DJL_MAX_SEGMENTS; i++) p.seg_distance[i] = 1e307;
+    st = djl_plan_motion(&p, &plan, &e);
+    if (st != DJL_E_PARAM || strcmp(e.param, "seg_distance[1]") != 0 || !strstr(e.message, "span"))
+        FAIL("issue case 4: %s %s: %s", djl_status_name(st), e.param, e.message);
+    p.v_max = 1e290; /* (not too many samples at v_max) */
+    for (i = 0; i < DJL_MAX_SEGMENTS; i++) p.seg_distance[i] = 0.9e299; /* the 12th exceeds */
+    st = djl_plan_motion(&p, &plan, &e);
+    if (st != DJL_E_PARAM || strcmp(e.param, "seg_distance[12]") != 0)
+        FAIL("issue case 4 (sum): %s %s: %s", djl_status_name(st), e.param, e.message);
+    p.n_segments = 0;
+    p.x0 = -2e300;
+    st = djl_plan_motion(&p, &plan, &e);
+    if (st != DJL_E_PARAM || strcmp(e.param, "x0") != 0)
+        FAIL("issue case 4 (x0): %s %s: %s", djl_status_name(st), e.param, e.message);
+}
+
 /* The parameters of a failing case, to reproduce it. */
 static void dump_params(long cs, const djl_params *p)
 {
@@ -510,6 +576,7 @@ int main(int argc, char **argv)
     if (argc > 2) /* mix the seed: xorshift needs a non-zero state */
         rng_state ^= strtoull(argv[2], NULL, 10) * 0x9E3779B97F4A7C15ULL;
     if (rng_state == 0) rng_state = 88172645463325252ULL;
+    issue_cases();
     for (i = 0; i < cases; i++) {
         const char *expect = NULL;
         djl_status st;
