@@ -24,8 +24,8 @@
  *    d_max", generalised to filtered steps).
  */
 #include "djl_core.h"
+#include "djl_math.h" /* floor, sqrt, ... without libm (see there) */
 
-#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
@@ -103,7 +103,7 @@ static int stage_used(int profile, int stage)
 
 static djl_status check_positive(djl_error *err, const char *name, double v, const char *unit)
 {
-    if (!isfinite(v) || !(v > 0.0))
+    if (!djl_isfinite(v) || !(v > 0.0))
         return set_error(err, DJL_E_PARAM, name, v,
                          "%s = %g %s: must be a finite number > 0", name, v, unit);
     if (v < DJL_MIN_MAGNITUDE)
@@ -137,7 +137,7 @@ djl_status djl_validate(const djl_params *p, djl_error *err)
         snprintf(name, sizeof name, "T_F%d", i + 1);
         if ((st = check_positive(err, name, T, "s")) != DJL_OK) return st;
         if (stage_used(p->profile, i)) {
-            double N = floor(T / p->Te + 0.5);
+            double N = djl_floor(T / p->Te + 0.5);
             if (N < 1.0)
                 return set_error(err, DJL_E_PARAM, name, T,
                                  "%s = %g s rounds to 0 samples at Te = %g s: a jerk time must "
@@ -149,12 +149,12 @@ djl_status djl_validate(const djl_params *p, djl_error *err)
                                  DJL_MAX_FILTER_SAMPLES);
         }
     }
-    if (!isfinite(p->x0))
+    if (!djl_isfinite(p->x0))
         return set_error(err, DJL_E_PARAM, "x0", p->x0, "x0 = %g m: must be finite", p->x0);
-    if (fabs(p->x0) > DJL_MAX_POSITION)
+    if (djl_fabs(p->x0) > DJL_MAX_POSITION)
         return set_error(err, DJL_E_PARAM, "x0", p->x0,
                          "x0 = %g m: |x0| must not exceed %g m", p->x0, DJL_MAX_POSITION);
-    if (!isfinite(p->v0) || fabs(p->v0) > p->v_max)
+    if (!djl_isfinite(p->v0) || djl_fabs(p->v0) > p->v_max)
         return set_error(err, DJL_E_PARAM, "v0", p->v0,
                          "v0 = %g m/s: must be finite and |v0| <= v_max = %g m/s", p->v0,
                          p->v_max);
@@ -164,7 +164,7 @@ djl_status djl_validate(const djl_params *p, djl_error *err)
                          "1..%d", (int)p->n_segments, DJL_MAX_SEGMENTS);
 
     n = p->n_segments == 0 ? 1 : p->n_segments;
-    reach = fabs(p->x0);
+    reach = djl_fabs(p->x0);
     for (i = 0; i < n; i++) {
         double D = p->n_segments == 0 ? p->distance : p->seg_distance[i];
         double ve = p->n_segments == 0 ? p->v_e : p->seg_v_end[i];
@@ -181,19 +181,19 @@ djl_status djl_validate(const djl_params *p, djl_error *err)
             snprintf(sname, sizeof sname, "v0");
         else
             snprintf(sname, sizeof sname, "seg_v_end[%d]", i);
-        if (!isfinite(D))
+        if (!djl_isfinite(D))
             return set_error(err, DJL_E_PARAM, dname, D, "%s = %g m: must be finite", dname, D);
-        if (D != 0.0 && fabs(D) < DJL_MIN_MAGNITUDE)
+        if (D != 0.0 && djl_fabs(D) < DJL_MIN_MAGNITUDE)
             return set_error(err, DJL_E_PARAM, dname, D,
                              "%s = %g m: a non-zero distance must be at least %g m in magnitude "
                              "(a subnormal double has too few significant digits to be planned "
                              "exactly)", dname, D, DJL_MIN_MAGNITUDE);
-        reach += fabs(D);
+        reach += djl_fabs(D);
         if (reach > DJL_MAX_POSITION)
             return set_error(err, DJL_E_PARAM, dname, D,
                              "%s = %g m: |x0| + the sum of |distance| up to it is %g m, more than "
                              "the %g m a motion may span", dname, D, reach, DJL_MAX_POSITION);
-        if (!isfinite(ve) || fabs(ve) > p->v_max)
+        if (!djl_isfinite(ve) || djl_fabs(ve) > p->v_max)
             return set_error(err, DJL_E_PARAM, vname, ve,
                              "%s = %g m/s: must be finite and not above v_max = %g m/s in "
                              "magnitude", vname, ve, p->v_max);
@@ -217,7 +217,7 @@ djl_status djl_validate(const djl_params *p, djl_error *err)
             return set_error(err, DJL_E_PARAM, dname, D,
                              "%s = 0 m with a non-zero velocity at its start (%g m/s) or end "
                              "(%g m/s): a null segment must start and end at rest", dname, vs, ve);
-        if (fabs(D) / (p->v_max * p->Te) > 1e14)
+        if (djl_fabs(D) / (p->v_max * p->Te) > 1e14)
             return set_error(err, DJL_E_PARAM, dname, D,
                              "%s = %g m would take more than 1e14 samples at v_max = %g m/s and "
                              "Te = %g s", dname, D, p->v_max, p->Te);
@@ -364,7 +364,7 @@ static int64_t ceil_len(double x)
 {
     if (!(x < (double)DJL_MAX_MOTION_SAMPLES)) return DJL_MAX_MOTION_SAMPLES;
     if (x < 0.0) return 0;
-    return (int64_t)ceil(x);
+    return (int64_t)djl_ceil(x);
 }
 
 /* Whole-sample stage lengths for the peak vp, each f times as long (in
@@ -389,7 +389,7 @@ static int try_ad(const sctx *c, int64_t n1, int64_t k, int64_t m, int signfree,
     ed = effl((double)m, c->N3, c->N4);
     al = (vp - c->vs) / (ea * c->Te);
     dl = (vp - c->ve) / (ed * c->Te);
-    if (!isfinite(vp) || vp < 0.0 || vp > c->vm * (1.0 + LIMIT_TOL)) return 0;
+    if (!djl_isfinite(vp) || vp < 0.0 || vp > c->vm * (1.0 + LIMIT_TOL)) return 0;
     if (!signfree && (al < 0.0 || dl < 0.0)) return 0;
     if (al > c->am * (1.0 + LIMIT_TOL) || -al > c->dm * (1.0 + LIMIT_TOL)) return 0;
     if (dl > c->dm * (1.0 + LIMIT_TOL) || -dl > c->am * (1.0 + LIMIT_TOL)) return 0;
@@ -452,7 +452,7 @@ static int cont_solve(const sctx *c, double lo, double hi, double *vp, double *k
         if (!(hi > 0.0)) return 0;
         *vp = hi;
         *kx = (c->D - Dhi) / (hi * c->Te);
-        return isfinite(*kx);
+        return djl_isfinite(*kx);
     }
     Dlo = D_cont(c, lo, 0.0);
     if (!(c->D >= Dlo)) return 0;
@@ -481,11 +481,11 @@ static int solve_b1(const sctx *c0, ssol *out)
          * jerk times (T_1 or T_3 would be negative; we also merge when the
          * acceleration would change sign) uses one jerk time. */
         double Ta = (vp - c.vs) / (c.am * c.Te), Td = (vp - c.ve) / (c.dm * c.Te);
-        if (c.N1 != c.N2 && Ta < 0.5 * fabs((double)c.N2 - c.N1)) {
+        if (c.N1 != c.N2 && Ta < 0.5 * djl_fabs((double)c.N2 - c.N1)) {
             c.N2 = c.N1;
             mergedA = 1;
         }
-        if (c.N3 != c.N4 && Td < 0.5 * fabs((double)c.N4 - c.N3)) {
+        if (c.N3 != c.N4 && Td < 0.5 * djl_fabs((double)c.N4 - c.N3)) {
             c.N4 = c.N3;
             mergedD = 1;
         }
@@ -518,7 +518,7 @@ static int fit_ad(const sctx *c, double vt, ssol *out)
         if (try_ad(c, n1, k, m, 1, out)) return 1;
         ad_coeffs(c, (double)n1, (double)k, (double)m, &K0, &K1, &be);
         v = (c->D / c->Te - K0) / K1;
-        if (!isfinite(v)) return 0;
+        if (!djl_isfinite(v)) return 0;
         stage_lengths(c, v, 1.0, &n1v, &mv);
         if (n1v <= n1 && mv <= m) return 0;
         k -= imax2(n1v - n1, 0) + imax2(mv - m, 0);
@@ -555,7 +555,7 @@ static int solve_b23_once(const sctx *c, int branch, ssol *out)
         double K0, K1, be, kr;
         int64_t n1, m, k;
         int j;
-        stage_lengths(c, vp, ldexp(1.0, p), &n1, &m);
+        stage_lengths(c, vp, djl_ldexp(1.0, p), &n1, &m);
         ad_coeffs(c, (double)n1, (double)kmin(c), (double)m, &K0, &K1, &be);
         if (!(vp > 0.0)) break;
         kr = (double)kmin(c) + (c->D / c->Te - K0 - vp * K1) / vp;
@@ -576,7 +576,7 @@ static int solve_b23_once(const sctx *c, int branch, ssol *out)
      * shallow one), the cruise for the distance at vt. */
     out->ok = 0;
     for (p = 0; p <= 60; p++) {
-        double vt = hi - (hi - lo) * exp2(-p / 3.0); /* lo .. hi - 2^-20 (hi - lo) */
+        double vt = hi - (hi - lo) * djl_exp2(-p / 3.0); /* lo .. hi - 2^-20 (hi - lo) */
         ssol s;
         if (fit_ad(c, vt, &s) && better(&s, out)) *out = s;
     }
@@ -601,9 +601,10 @@ static double peak_unlimited(double D, double vs, double ve, double am, double d
 {
     double r = 1.0 / (1.0 + dm / am);               /* a / (a + d) */
     double h = am < dm ? am * (1.0 - r) : dm * r;   /* a d / (a + d) */
-    double w = sqrt(2.0 * D) * sqrt(h);             /* v* from rest to rest */
+    double w = djl_sqrt(2.0 * D) * djl_sqrt(h);     /* v* from rest to rest */
     double V = dmax2(dmax2(vs, ve), w);
-    return V * sqrt((1.0 - r) * (vs / V) * (vs / V) + r * (ve / V) * (ve / V) + (w / V) * (w / V));
+    return V * djl_sqrt((1.0 - r) * (vs / V) * (vs / V) + r * (ve / V) * (ve / V) +
+                        (w / V) * (w / V));
 }
 
 /* Last resort of the AD structure (v_p above both end velocities): for a peak
@@ -628,17 +629,17 @@ static int solve_fit(const sctx *c0, ssol *out)
     /* from the continuous optimum (the limits at their most) down */
     if (cont_solve(c0, lo, hi, &vc, &kx) && vc > lo) hi = vc;
     for (p = 0; p <= 96; p++) {
-        double vt = lo + (hi - lo) * exp2(-p / 4.0); /* hi .. 1e-7 (hi - lo) above lo */
+        double vt = lo + (hi - lo) * djl_exp2(-p / 4.0); /* hi .. 1e-7 (hi - lo) above lo */
         sctx c = *c0;
         int mergedA = 0, mergedD = 0;
         if (!(vt > lo)) break;
         if (c.rule == DJL_SHORT_OVERLAP) { /* the paper's fallback, as in solve_b1 */
             double Ta = (vt - c.vs) / (c.am * c.Te), Td = (vt - c.ve) / (c.dm * c.Te);
-            if (c.N1 != c.N2 && Ta < 0.5 * fabs((double)c.N2 - c.N1)) {
+            if (c.N1 != c.N2 && Ta < 0.5 * djl_fabs((double)c.N2 - c.N1)) {
                 c.N2 = c.N1;
                 mergedA = 1;
             }
-            if (c.N3 != c.N4 && Td < 0.5 * fabs((double)c.N4 - c.N3)) {
+            if (c.N3 != c.N4 && Td < 0.5 * djl_fabs((double)c.N4 - c.N3)) {
                 c.N4 = c.N3;
                 mergedD = 1;
             }
@@ -729,12 +730,12 @@ static int solve_pinned(const sctx *c, ssol *s, double *resid, double *dmin)
     /* a cruise longer than a plan may hold (a speed far too low for the
      * distance): not this way */
     if (!(kr < (double)DJL_MAX_MOTION_SAMPLES)) return 0;
-    kk[0] = kr <= 0.0 ? 0 : (int64_t)floor(kr);
+    kk[0] = kr <= 0.0 ? 0 : (int64_t)djl_floor(kr);
     kk[1] = kr <= 0.0 ? 0 : ceil_len(kr);
     k = 0;
     for (i = 0; i < 2; i++) {
         double r = c->D - pinned_D(c, s, kk[i], &be);
-        if (!found || fabs(r) < fabs(bestr)) {
+        if (!found || djl_fabs(r) < djl_fabs(bestr)) {
             found = 1;
             bestr = r;
             k = kk[i];
@@ -796,7 +797,7 @@ static int solve_split(const sctx *c, ssol *out)
     int acc = c->vs < c->ve, split, after;
     double Na = acc ? c->N1 : c->N3, Nb = acc ? c->N2 : c->N4;
     int64_t nmin = acc ? nmin_a(c) : nmin_d(c), n0, kf, n, k;
-    double dv = fabs(c->ve - c->vs), lim = acc ? c->am : c->dm, kr;
+    double dv = djl_fabs(c->ve - c->vs), lim = acc ? c->am : c->dm, kr;
     int found = 0;
     ssol best;
     if (c->vs == c->ve || !c->last) return 0;
@@ -809,7 +810,7 @@ static int solve_split(const sctx *c, ssol *out)
         kr = (double)pin.k + resid / (vlo * c->Te);
     }
     if (!(kr < (double)DJL_MAX_MOTION_SAMPLES)) return 0;
-    kf = kr < 0.0 ? 0 : (int64_t)floor(kr);
+    kf = kr < 0.0 ? 0 : (int64_t)djl_floor(kr);
     for (after = 0; after < 2; after++)
         for (split = 0; split < 2; split++)
             for (n = imax2(n0 - 1, nmin); n <= n0 + 3; n++)
@@ -925,8 +926,8 @@ static djl_status infeasible(djl_error *err, const djl_params *p, int i, const s
          * an estimate the randomised C driver checks (in the user's terms:
          * the residual carried in counts) */
         double v = dmax2(c->vs, c->ve);
-        double room = dmin + ldexp(fabs(D), kl) - c->D +
-                      v * (2.0 * sqrt(v * c->Te / dmin2(c->am, c->dm)) +
+        double room = dmin + djl_ldexp(djl_fabs(D), kl) - c->D +
+                      v * (2.0 * djl_sqrt(v * c->Te / dmin2(c->am, c->dm)) +
                            ((double)c->N1 + c->N2 + c->N3 + c->N4) * c->Te);
         return set_error(err, DJL_E_INFEASIBLE, dname, D,
                          "%s = %g m cannot end exactly on a sample at the non-zero end speed %g "
@@ -934,13 +935,13 @@ static djl_status infeasible(djl_error *err, const djl_params *p, int i, const s
                          "Te = %g s, the jerk times): the minimum is about %g m and from about "
                          "%g m on every distance lands, only some in between (they need room "
                          "for a speed dip); use a longer distance, or end at rest",
-                         dname, D, ve, vs, p->v_max, p->a_max, p->d_max, p->Te, ldexp(dmin, -kl),
-                         ldexp(room, -kl));
+                         dname, D, ve, vs, p->v_max, p->a_max, p->d_max, p->Te,
+                         djl_ldexp(dmin, -kl), djl_ldexp(room, -kl));
     }
-    dmin = ldexp(dmin, -kl);
-    if (fabs(ldexp(c->D, -kl) - fabs(D)) > 1e-12 * (fabs(D) + fabs(dmin)))
+    dmin = djl_ldexp(dmin, -kl);
+    if (djl_fabs(djl_ldexp(c->D, -kl) - djl_fabs(D)) > 1e-12 * (djl_fabs(D) + djl_fabs(dmin)))
         snprintf(left, sizeof left, "; rounding the earlier segments to whole samples left it %g m",
-                 ldexp(c->D, -kl));
+                 djl_ldexp(c->D, -kl));
     if (c->vs == c->ve && c->vs > 0.0)
         return set_error(err, DJL_E_INFEASIBLE, dname, D,
                          "%s = %g m cannot end exactly on a sample cruising at %g m/s (v_max = %g "
@@ -948,7 +949,7 @@ static djl_status infeasible(djl_error *err, const djl_params *p, int i, const s
                          "pure cruise covers whole samples of %g m, landing in between needs a "
                          "speed dip, and a dip needs about %g m or more%s",
                          dname, D, ve, p->v_max, p->a_max, p->d_max, p->Te,
-                         ldexp(c->vs * c->Te, -kl), dmin, left);
+                         djl_ldexp(c->vs * c->Te, -kl), dmin, left);
     return set_error(err, DJL_E_INFEASIBLE, dname, D,
                      "%s = %g m is too short to go from %g m/s to %g m/s within v_max = %g m/s, "
                      "a_max = %g m/s2, d_max = %g m/s2 and the jerk times at Te = %g s: it needs "
@@ -1076,7 +1077,7 @@ static djl_status check_duration(const djl_params *p, int i, djl_error *err)
     double Dr = p->n_segments == 0 ? p->distance : p->seg_distance[i];
     double vE = p->n_segments == 0 ? p->v_e : p->seg_v_end[i];
     double vS = i == 0 ? p->v0 : p->seg_v_end[i - 1];
-    double sg = Dr < 0.0 ? -1.0 : 1.0, D = fabs(Dr), vs = sg * vS, ve = sg * vE, Te = p->Te;
+    double sg = Dr < 0.0 ? -1.0 : 1.0, D = djl_fabs(Dr), vs = sg * vS, ve = sg * vE, Te = p->Te;
     double am = p->a_max, dm = p->d_max, lim = (double)DJL_MAX_MOTION_SAMPLES * (1.0 + 1e-9);
     double vt, na, nd;
     char dname[40];
@@ -1086,8 +1087,8 @@ static djl_status check_duration(const djl_params *p, int i, djl_error *err)
         na = (vt - vs) / am / Te;
         nd = (vt - ve) / dm / Te;
     } else {
-        double Ta = 2.0 * D / (vs + hypot(vs, sqrt(2.0 * am) * sqrt(D)));
-        double Td = 2.0 * D / (ve + hypot(ve, sqrt(2.0 * dm) * sqrt(D)));
+        double Ta = 2.0 * D / (vs + djl_hypot(vs, djl_sqrt(2.0 * am) * djl_sqrt(D)));
+        double Td = 2.0 * D / (ve + djl_hypot(ve, djl_sqrt(2.0 * dm) * djl_sqrt(D)));
         na = dmax2(Ta, ve > vs ? (ve - vs) / am : 0.0) / Te;
         nd = dmax2(Td, ve > vs ? 0.0 : (vs - ve) / dm) / Te;
     }
@@ -1278,8 +1279,8 @@ static djl_status walk_pieces(const work_t *w, djl_plan *plan, const djl_params 
         if (level == 0.0) val = vsnap;
         if (b >= plan->k_end) {
             /* terminal piece: constant velocity for ever */
-            double verr = fabs(v - plan->v_target);
-            if (!(verr <= 1e-9 * (p->v_max + fabs(plan->v_target))) || a != 0.0)
+            double verr = djl_fabs(v - plan->v_target);
+            if (!(verr <= 1e-9 * (p->v_max + djl_fabs(plan->v_target))) || a != 0.0)
                 return set_error(err, DJL_E_INTERNAL, "", 0.0,
                                  "planner self-check: end velocity %.17g, expected %.17g "
                                  "(acceleration %.3g)", v, plan->v_target, a);
@@ -1305,7 +1306,7 @@ static djl_status walk_pieces(const work_t *w, djl_plan *plan, const djl_params 
         }
     }
     /* self-check: the plan lands where it was asked to */
-    if (!(fabs(plan->piece[plan->n_pieces - 1].x - plan->x_target) <= tolx * scale))
+    if (!(djl_fabs(plan->piece[plan->n_pieces - 1].x - plan->x_target) <= tolx * scale))
         return set_error(err, DJL_E_INTERNAL, "", 0.0,
                          "planner self-check: final displacement %.17g m, expected %.17g m",
                          plan->piece[plan->n_pieces - 1].x, plan->x_target);
@@ -1335,19 +1336,19 @@ static djl_status plan_once(const djl_params *p, const djl_params *user, int kl,
 
     for (i = 0; i < 4; i++) {
         int src = p->profile == DJL_PROFILE_DJL ? i : 0;
-        N[i] = p->profile == DJL_PROFILE_AL ? 0 : (int32_t)floor(p->T_F[src] / p->Te + 0.5);
+        N[i] = p->profile == DJL_PROFILE_AL ? 0 : (int32_t)djl_floor(p->T_F[src] / p->Te + 0.5);
         plan->N[i] = N[i];
     }
 
     n = p->n_segments == 0 ? 1 : p->n_segments;
     plan->n_segments = n;
     w.lead = !(N[0] == N[1] && N[1] == N[2] && N[2] == N[3]);
-    scale = fabs(p->v0) * p->Te;
+    scale = djl_fabs(p->v0) * p->Te;
     for (i = 0; i < n; i++) {
         w.Dreal[i] = p->n_segments == 0 ? p->distance : p->seg_distance[i];
         w.vE[i] = p->n_segments == 0 ? p->v_e : p->seg_v_end[i];
         w.vS[i] = i == 0 ? p->v0 : w.vE[i - 1];
-        scale += fabs(w.Dreal[i]);
+        scale += djl_fabs(w.Dreal[i]);
         plan->x_target += w.Dreal[i];
     }
     plan->v_target = w.vE[n - 1];
@@ -1467,7 +1468,7 @@ static djl_status plan_once(const djl_params *p, const djl_params *user, int kl,
                 add_step(&w, t3 + s->m, sg * s->dl, s->N4, 0.0, 1, w.vE[i]);
             }
         }
-        if (fabs(s->vp) > plan->v_reached) plan->v_reached = fabs(s->vp);
+        if (djl_fabs(s->vp) > plan->v_reached) plan->v_reached = djl_fabs(s->vp);
         if (s->hasA) {
             if (s->al > plan->a_reached) plan->a_reached = s->al;
             if (-s->al > plan->d_reached) plan->d_reached = -s->al;
@@ -1540,8 +1541,8 @@ static int plan_clean(const djl_plan *pl)
         val[5] = pc->v_al;
         val[6] = pc->a_al;
         for (q = 0; q < 7; q++) {
-            if (!isfinite(val[q])) return 0;
-            big[q] = dmax2(big[q], fabs(val[q]));
+            if (!djl_isfinite(val[q])) return 0;
+            big[q] = dmax2(big[q], djl_fabs(val[q]));
         }
     }
     for (q = 0; q < 7; q++)
@@ -1559,9 +1560,9 @@ static int units(const djl_params *p, int *kl, int *kt)
 {
     double sum = 0.0;
     int i, n = p->n_segments == 0 ? 1 : p->n_segments;
-    for (i = 0; i < n; i++) sum += fabs(p->n_segments == 0 ? p->distance : p->seg_distance[i]);
-    *kt = -ilogb(p->Te) - 10;
-    *kl = sum > 0.0 ? -ilogb(sum) : -(ilogb(p->v_max) + ilogb(p->Te));
+    for (i = 0; i < n; i++) sum += djl_fabs(p->n_segments == 0 ? p->distance : p->seg_distance[i]);
+    *kt = -djl_ilogb(p->Te) - 10;
+    *kl = sum > 0.0 ? -djl_ilogb(sum) : -(djl_ilogb(p->v_max) + djl_ilogb(p->Te));
     for (i = 0; i < 4; i++) /* length, speed, acceleration, jerk */
         if (*kl - i * *kt > 600 || *kl - i * *kt < -600) return 1;
     return 0;
@@ -1576,18 +1577,18 @@ static djl_status plan_scaled(const djl_params *p, int kl, int kt, djl_plan *pla
     double big = 0.0;
     int i, n = p->n_segments == 0 ? 1 : p->n_segments, Nmin = 0;
     int ev = kl - kt, ea = kl - 2 * kt, ej = kl - 3 * kt; /* m/s, m/s^2, m/s^3 */
-    q.Te = ldexp(p->Te, kt);
-    for (i = 0; i < 4; i++) q.T_F[i] = ldexp(p->T_F[i], kt);
+    q.Te = djl_ldexp(p->Te, kt);
+    for (i = 0; i < 4; i++) q.T_F[i] = djl_ldexp(p->T_F[i], kt);
     q.x0 = 0.0;
-    q.distance = ldexp(p->distance, kl);
-    q.v0 = ldexp(p->v0, ev);
-    q.v_e = ldexp(p->v_e, ev);
-    q.v_max = ldexp(p->v_max, ev);
-    q.a_max = ldexp(p->a_max, ea);
-    q.d_max = ldexp(p->d_max, ea);
+    q.distance = djl_ldexp(p->distance, kl);
+    q.v0 = djl_ldexp(p->v0, ev);
+    q.v_e = djl_ldexp(p->v_e, ev);
+    q.v_max = djl_ldexp(p->v_max, ev);
+    q.a_max = djl_ldexp(p->a_max, ea);
+    q.d_max = djl_ldexp(p->d_max, ea);
     for (i = 0; i < DJL_MAX_SEGMENTS; i++) {
-        q.seg_distance[i] = ldexp(p->seg_distance[i], kl);
-        q.seg_v_end[i] = ldexp(p->seg_v_end[i], ev);
+        q.seg_distance[i] = djl_ldexp(p->seg_distance[i], kl);
+        q.seg_v_end[i] = djl_ldexp(p->seg_v_end[i], ev);
     }
     /* the parameters must survive the change of units (they may span more
      * than a double's range between them) */
@@ -1599,29 +1600,29 @@ static djl_status plan_scaled(const djl_params *p, int kl, int kt, djl_plan *pla
     plan->x_target = 0.0;
     for (i = 0; i < n; i++) plan->x_target += p->n_segments == 0 ? p->distance : p->seg_distance[i];
     plan->v_target = p->n_segments == 0 ? p->v_e : p->seg_v_end[n - 1];
-    plan->v_reached = ldexp(plan->v_reached, -ev);
-    plan->a_reached = ldexp(plan->a_reached, -ea);
-    plan->d_reached = ldexp(plan->d_reached, -ea);
+    plan->v_reached = djl_ldexp(plan->v_reached, -ev);
+    plan->a_reached = djl_ldexp(plan->a_reached, -ea);
+    plan->d_reached = djl_ldexp(plan->d_reached, -ea);
     for (i = 0; i < plan->n_segments; i++) {
         djl_segment_plan *sp = &plan->seg[i];
-        sp->v_peak = ldexp(sp->v_peak, -ev);
-        sp->a_level = ldexp(sp->a_level, -ea);
-        sp->d_level = ldexp(sp->d_level, -ea);
-        sp->distance = ldexp(sp->distance, -kl);
+        sp->v_peak = djl_ldexp(sp->v_peak, -ev);
+        sp->a_level = djl_ldexp(sp->a_level, -ea);
+        sp->d_level = djl_ldexp(sp->d_level, -ea);
+        sp->distance = djl_ldexp(sp->distance, -kl);
     }
     for (i = 0; i < plan->n_pieces; i++) {
         djl_piece *pc = &plan->piece[i];
-        pc->x = ldexp(pc->x, -kl);
-        pc->v = ldexp(pc->v, -ev);
-        pc->a = ldexp(pc->a, -ea);
-        pc->j = ldexp(pc->j, -ej);
-        pc->x_al = ldexp(pc->x_al, -kl);
-        pc->v_al = ldexp(pc->v_al, -ev);
-        pc->a_al = ldexp(pc->a_al, -ea);
-        big = dmax2(big, fabs(pc->j));
+        pc->x = djl_ldexp(pc->x, -kl);
+        pc->v = djl_ldexp(pc->v, -ev);
+        pc->a = djl_ldexp(pc->a, -ea);
+        pc->j = djl_ldexp(pc->j, -ej);
+        pc->x_al = djl_ldexp(pc->x_al, -kl);
+        pc->v_al = djl_ldexp(pc->v_al, -ev);
+        pc->a_al = djl_ldexp(pc->a_al, -ea);
+        big = dmax2(big, djl_fabs(pc->j));
     }
     plan->piece[plan->n_pieces - 1].v = plan->v_target;
-    if (isfinite(big) && !plan_clean(plan)) {
+    if (djl_isfinite(big) && !plan_clean(plan)) {
         /* values of the motion itself below the normal doubles: it is too
          * small to be planned exactly at these time scales */
         char name[40];
@@ -1631,8 +1632,9 @@ static djl_status plan_scaled(const djl_params *p, int kl, int kt, djl_plan *pla
             snprintf(name, sizeof name, "distance");
         else {
             for (i = 0; i < n; i++)
-                if (p->seg_distance[i] != 0.0 && (tiny == 0.0 || fabs(p->seg_distance[i]) < tiny)) {
-                    tiny = fabs(p->seg_distance[i]);
+                if (p->seg_distance[i] != 0.0 &&
+                    (tiny == 0.0 || djl_fabs(p->seg_distance[i]) < tiny)) {
+                    tiny = djl_fabs(p->seg_distance[i]);
                     at = i;
                 }
             D = p->seg_distance[at];
@@ -1645,7 +1647,7 @@ static djl_status plan_scaled(const djl_params *p, int kl, int kt, djl_plan *pla
                          "double, %g, and lose their digits", name, D, p->Te, p->v_max, p->a_max,
                          p->d_max, DJL_MIN_MAGNITUDE);
     }
-    if (!isfinite(big)) {
+    if (!djl_isfinite(big)) {
         /* the jerk (a level over a jerk time) beyond a double */
         char name[40];
         for (i = 0; i < 4; i++)

@@ -4,8 +4,8 @@
  */
 #define DJL_VARS_TABLES
 #include "fmu_model.h"
+#include "djl_math.h" /* floor, fmax, ... without libm (see there) */
 
-#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
@@ -229,7 +229,7 @@ static void log_plan(const model_instance *m)
     for (i = 0; i < 4; i++) {
         int used = pl->p.profile == DJL_PROFILE_DJL || (pl->p.profile == DJL_PROFILE_JL && i == 0);
         double T = pl->p.T_F[i], Ta = djl_applied_jerk_time(pl, i);
-        if (used && fabs(T - Ta) > 1e-9 * T)
+        if (used && djl_fabs(T - Ta) > 1e-9 * T)
             model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
                       "T_F%d = %.17g s is not a whole number of samples of Te = %g s: the jerk "
                       "time applied is %d samples = %.17g s",
@@ -267,8 +267,8 @@ static void log_plan(const model_instance *m)
 /* Unit in the last place of |x| (x finite): the spacing of doubles there. */
 static double ulp(double x)
 {
-    x = fabs(x);
-    return nextafter(x, HUGE_VAL) - x;
+    x = djl_fabs(x);
+    return djl_nextafter(x, DJL_HUGE_VAL) - x;
 }
 
 #ifndef DJL_MAX_POSITION
@@ -284,19 +284,19 @@ static model_status check_range(model_instance *m, const char *fn, double off)
     const model_data *d = &m->d;
     const djl_plan *pl = &d->plan;
     double H = (double)DJL_MAX_MOTION_SAMPLES, Te = d->p.Te, before, after, x;
-    if (!(Te * H <= DJL_MAX_POSITION && fabs(d->start_time) + Te * H <= DJL_MAX_POSITION))
+    if (!(Te * H <= DJL_MAX_POSITION && djl_fabs(d->start_time) + Te * H <= DJL_MAX_POSITION))
         return model_fail(m, "%s: invalid parameter Te = %g s: the FMU's horizon of %g samples "
                           "from the start time %g s would end beyond %g s", fn, Te, H,
                           d->start_time, DJL_MAX_POSITION);
     before = off > 0.0 ? off : 0.0; /* samples before the motion starts */
-    x = fabs(d->p.x0) + fabs(d->p.v0) * (before * Te);
+    x = djl_fabs(d->p.x0) + djl_fabs(d->p.v0) * (before * Te);
     if (!(x <= DJL_MAX_POSITION))
         return model_fail(m, "%s: invalid parameters v0 = %g m/s with t_start = %g s (x0 = %g m): "
                           "the position before the motion starts, x0 + v0 (t - t_start), would "
                           "exceed %g m at the start time %g s", fn, d->p.v0, d->t_start, d->p.x0,
                           DJL_MAX_POSITION, d->start_time);
     after = H - off - (double)pl->k_end; /* samples the FMU may run after the motion */
-    x = fabs(pl->x_target) + (after > 0.0 ? fabs(pl->v_target) * (after * Te) : 0.0);
+    x = djl_fabs(pl->x_target) + (after > 0.0 ? djl_fabs(pl->v_target) * (after * Te) : 0.0);
     if (!(x <= DJL_MAX_POSITION)) {
         char name[40];
         if (d->p.n_segments == 0)
@@ -320,7 +320,7 @@ static model_status ensure_plan(model_instance *m, const char *fn)
     double off;
     model_data *d = &m->d;
     if (d->planned) return ST_OK;
-    if (!isfinite(d->t_start))
+    if (!djl_isfinite(d->t_start))
         return model_fail(m, "%s: invalid parameter t_start = %g s: must be finite", fn,
                           d->t_start);
     st = djl_plan_motion(&d->p, &d->plan, &err);
@@ -329,17 +329,17 @@ static model_status ensure_plan(model_instance *m, const char *fn)
     /* The generator samples at start_time + n Te: the motion starts at the
      * first of those samples at or after t_start. */
     off = (d->t_start - d->start_time) / d->p.Te;
-    if (!isfinite(off) || fabs(off) > 1e15)
+    if (!djl_isfinite(off) || djl_fabs(off) > 1e15)
         return model_fail(m, "%s: t_start = %g s is %g samples of Te = %g s away from the start "
                           "time %g s: too far", fn, d->t_start, off, d->p.Te, d->start_time);
     /* on a sample to rounding: 1e-9 of the offset, or what t_start and the start time
      * can resolve at their magnitude (2.4e-7 s at 1.7e9 s) */
-    if (fabs(off - floor(off + 0.5)) <=
-        fmax(1e-9 * (1.0 + fabs(off)), 4.0 * ulp(fmax(fabs(d->t_start), fabs(d->start_time))) /
-                                           d->p.Te))
-        off = floor(off + 0.5);
+    if (djl_fabs(off - djl_floor(off + 0.5)) <=
+        djl_fmax(1e-9 * (1.0 + djl_fabs(off)),
+                 4.0 * ulp(djl_fmax(djl_fabs(d->t_start), djl_fabs(d->start_time))) / d->p.Te))
+        off = djl_floor(off + 0.5);
     else {
-        off = ceil(off);
+        off = djl_ceil(off);
         model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
                   "t_start = %.17g s is not a sample of the generator (start time %.17g s + k Te, "
                   "Te = %.17g s): the motion starts at the next sample, %.17g s", d->t_start,
@@ -476,7 +476,7 @@ model_status model_get(model_instance *m, unsigned int vr, char type, double *va
 
 model_status model_setup(model_instance *m, double start_time)
 {
-    if (!isfinite(start_time))
+    if (!djl_isfinite(start_time))
         return model_fail(m, "start time %g s: must be finite", start_time);
     m->d.start_time = start_time;
     m->d.t_now = start_time;
@@ -504,7 +504,7 @@ model_status model_exit_init(model_instance *m)
  * a step, whatever the start time. */
 static double time_tolerance(const model_data *d, double t)
 {
-    return fmax(1e-6 * d->p.Te, 4.0 * ulp(fmax(fabs(t), fabs(d->t_now))));
+    return djl_fmax(1e-6 * d->p.Te, 4.0 * ulp(djl_fmax(djl_fabs(t), djl_fabs(d->t_now))));
 }
 
 model_status model_do_step(model_instance *m, double t, double h)
@@ -512,29 +512,30 @@ model_status model_do_step(model_instance *m, double t, double h)
     model_data *d = &m->d;
     double r, k, phase, whole, t_end;
     int64_t n;
-    if (!(isfinite(h) && h > 0.0))
+    if (!(djl_isfinite(h) && h > 0.0))
         return model_fail(m, "DoStep: communication step %g s: must be a finite number > 0", h);
-    if (t != d->t_now && !(isfinite(t) && fabs(t - d->t_now) <= time_tolerance(d, t)))
+    if (t != d->t_now && !(djl_isfinite(t) && djl_fabs(t - d->t_now) <= time_tolerance(d, t)))
         return model_fail(m, "DoStep: currentCommunicationPoint = %.17g s, but the FMU is at "
                           "%.17g s: a step must start where the previous one ended", t, d->t_now);
     t_end = t + h;
-    if (!isfinite(t_end))
+    if (!djl_isfinite(t_end))
         return model_fail(m, "DoStep: %.17g s + a step of %g s is not a finite time", t, h);
     /* The profile's time advances by h exactly: in whole samples when h is one (to a
      * millionth of a sample, as always), else by whole samples plus a phase. */
     if (h == m->step_h && d->p.Te == m->step_Te) { /* the same step as last time */
         whole = m->step_whole;
         phase = d->phase;
-    } else if (r = h / d->p.Te, k = floor(r + 0.5), k >= 1.0 && fabs(r - k) <= 1e-6 + 1e-12 * k) {
+    } else if (r = h / d->p.Te, k = djl_floor(r + 0.5),
+               k >= 1.0 && djl_fabs(r - k) <= 1e-6 + 1e-12 * k) {
         whole = k;
         phase = d->phase;
         m->step_h = h; /* remembered: a master's next step is usually the same */
         m->step_Te = d->p.Te;
         m->step_whole = k;
     } else {
-        double f = d->phase + (r - floor(r));
-        whole = floor(r) + floor(f);
-        phase = f - floor(f);
+        double f = d->phase + (r - djl_floor(r));
+        whole = djl_floor(r) + djl_floor(f);
+        phase = f - djl_floor(f);
         if (phase >= 1.0 - 1e-9) { /* rounding of fractions that add up to a sample */
             whole += 1.0;
             phase = 0.0;
@@ -585,7 +586,7 @@ static int finite_all(const double *x, size_t n)
 {
     size_t i;
     for (i = 0; i < n; i++)
-        if (!isfinite(x[i])) return 0;
+        if (!djl_isfinite(x[i])) return 0;
     return 1;
 }
 
@@ -611,17 +612,17 @@ static const char *state_flaw(const model_data *d, char *why, size_t nwhy)
         return why;
     }
     if (d->planned != 0 && d->planned != 1) return "the planned flag is neither 0 nor 1";
-    if (!isfinite(d->start_time)) return "the start time is not finite";
+    if (!djl_isfinite(d->start_time)) return "the start time is not finite";
     if (d->n < 0 || d->n > DJL_MAX_MOTION_SAMPLES) return "the sample counter is out of range";
     if (!(d->phase >= 0.0 && d->phase < 1.0)) return "the phase is not in [0, 1)";
-    if (!isfinite(d->t_now)) return "the communication time is not finite";
+    if (!djl_isfinite(d->t_now)) return "the communication time is not finite";
     if ((d->state & (MS_STEP | MS_TERMINATED)) && !d->planned)
         return "a state after initialization without a plan";
     if (!d->planned) return NULL; /* the plan is rebuilt before any use */
     if (djl_validate(&d->p, NULL) != DJL_OK) return "its parameters are invalid";
     if (!same_params(&d->p, &pl->p)) return "its plan was not made from its parameters";
-    if (!isfinite(d->t_start)) return "t_start is not finite";
-    if (!isfinite(d->offset) || fabs(d->offset) > 1e15 || d->offset != floor(d->offset))
+    if (!djl_isfinite(d->t_start)) return "t_start is not finite";
+    if (!djl_isfinite(d->offset) || djl_fabs(d->offset) > 1e15 || d->offset != djl_floor(d->offset))
         return "the start offset is not a whole number of samples in range";
     if (pl->n_segments < 1 || pl->n_segments > DJL_MAX_SEGMENTS)
         return "the plan's segment count is out of range";
@@ -632,8 +633,9 @@ static const char *state_flaw(const model_data *d, char *why, size_t nwhy)
     for (i = 0; i < 4; i++)
         if (pl->N[i] < 0 || pl->N[i] > DJL_MAX_FILTER_SAMPLES)
             return "a jerk time in samples is out of range";
-    if (!isfinite(pl->x_target) || !isfinite(pl->v_target) || !isfinite(pl->v_reached) ||
-        !isfinite(pl->a_reached) || !isfinite(pl->d_reached))
+    if (!djl_isfinite(pl->x_target) || !djl_isfinite(pl->v_target) ||
+        !djl_isfinite(pl->v_reached) || !djl_isfinite(pl->a_reached) ||
+        !djl_isfinite(pl->d_reached))
         return "a value of the plan is not finite";
     for (i = 0; i < pl->n_pieces; i++) {
         const djl_piece *pc = &pl->piece[i];

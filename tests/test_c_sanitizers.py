@@ -1,7 +1,8 @@
 """The C core and both FMI layers under AddressSanitizer + UBSan (and valgrind memcheck).
 
 The drivers in tests/c/ exercise random plans (valid and invalid), FMU state
-save/restore/serialisation, bad calls and several instances.
+save/restore/serialisation, bad calls and several instances, and the math of
+fmu_src/djl_math.h against libm.
 """
 
 from __future__ import annotations
@@ -30,6 +31,11 @@ PROGRAMS = {
     # communication points and steps (issue #10 items 1-2); the 10^8-step masters run
     # at -O2 in test_time_masters_run_to_the_end
     "test_time": (["test_time.c"], ["fmi2.c", "fmu_model.c", "djl_core.c"], ["200000"]),
+    # fmu_src/djl_math.h against libm, bit for bit: 10^5 random arguments per generator
+    # (tests/test_math_nolibm.py runs 2.2*10^5 at -O2)
+    "test_math": (["test_math.c"], [], ["100000", "7"]),
+    # the same plans with djl_math.h and with libm: 3*10^4 random cases
+    "test_plan_libm": (["test_plan_libm.c", "core_libm.c"], ["djl_core.c"], ["30000", "7"]),
 }
 
 

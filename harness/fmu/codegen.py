@@ -20,7 +20,7 @@ from .spec import VARIABLES, Variable
 
 SOURCES_COMMON = ("djl_core.c", "fmu_model.c")
 SOURCES = {2: SOURCES_COMMON + ("fmi2.c",), 3: SOURCES_COMMON + ("fmi3.c",)}
-HEADERS = ("djl_core.h", "djl_vars.h", "fmu_model.h")
+HEADERS = ("djl_core.h", "djl_math.h", "djl_vars.h", "fmu_model.h")
 
 DESCRIPTION = (
     "Sampled acceleration-limited (AL), jerk-limited (JL) and dissociated jerk-limited (DJL) "

@@ -1,0 +1,17 @@
+/*
+ * core_libm.c -- the planner of fmu_src/djl_core.c compiled with libm's math
+ * (-DDJL_USE_LIBM: djl_math.h maps djl_floor to floor, ...), its functions
+ * renamed libm_djl_*, so that tests/c/test_plan_libm.c can link it beside the
+ * FMU's own core and compare their plans.  (A function added to the core's
+ * interface and not renamed here makes the link fail: add it below.)
+ */
+#define DJL_USE_LIBM
+#define djl_status_name libm_djl_status_name
+#define djl_params_default libm_djl_params_default
+#define djl_validate libm_djl_validate
+#define djl_plan_motion libm_djl_plan_motion
+#define djl_eval libm_djl_eval
+#define djl_applied_jerk_time libm_djl_applied_jerk_time
+#define djl_motion_time libm_djl_motion_time
+
+#include "djl_core.c"
