@@ -11,6 +11,7 @@ from typing import Any
 
 from harness._resources import fmu_src_dir
 from harness.fmu.build import CFLAGS, default_fmu
+from harness.fmu.codegen import CORE_SOURCES
 from harness.fmu.runner import GeneratorFMU
 
 STREAM_SRC = Path(__file__).parent / "c" / "bench_stream.c"
@@ -21,7 +22,7 @@ def build_stream(folder: Path) -> Path:
     exe = folder / "bench_stream"
     flags = [f for f in CFLAGS if f not in ("-fPIC", "-fvisibility=hidden")]
     subprocess.run(["gcc", *flags, f"-I{fmu_src_dir()}", str(STREAM_SRC),
-                    str(fmu_src_dir() / "djl_core.c"), "-o", str(exe), "-lm"],
+                    *[str(fmu_src_dir() / f) for f in CORE_SOURCES], "-o", str(exe), "-lm"],
                    check=True, capture_output=True)
     return exe
 

@@ -4,7 +4,7 @@
  * Everything the co-simulation does once per sample, done in C and called
  * once per move:
  *
- *  - plan a move with the FMU's own generator core (fmu_src/djl_core.c: the
+ *  - plan a move with the FMU's own generator core (fmu_src/djl_*.c: the
  *    very code the FMU runs, linked in, not re-implemented) and sample it on
  *    the FMU's time grid (start time + n Te, the motion starting at the first
  *    sample at or after t_start, exactly as fmu_model.c does);

@@ -360,7 +360,7 @@ class Session:
     engine : {"fmu", "fast"}
         ``"fmu"``: the generator FMUs driven through fmpy, one FMI call per
         communication step (the reference: the FMU drives the plant).
-        ``"fast"``: the same generator core (``fmu_src/djl_core.c``) and the
+        ``"fast"``: the same generator core (``fmu_src/djl_*.c``) and the
         same plant, compiled into the extension module ``harness._engine`` and
         called once per move (:mod:`harness.engine`); equal results, about a
         hundred times faster.

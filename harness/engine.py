@@ -5,7 +5,7 @@ steps two generator FMUs through fmpy and the plant in Python, one FMI call
 and a few microseconds of Python per communication step.  This engine does
 the same work with the same code, compiled into the extension module
 :mod:`harness._engine` (built from ``harness/_engine.c`` and the FMU's own
-generator core ``fmu_src/djl_core.c`` at ``pip install``):
+generator core ``fmu_src/djl_*.c`` at ``pip install``):
 
 * planning and sampling a move: the FMU's planner (``djl_plan_motion``) and
   evaluator (``djl_eval``) on the FMU's sample grid (start time + n·Te, motion

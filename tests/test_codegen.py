@@ -16,7 +16,7 @@ from harness.fmu import codegen, spec
 def root() -> Path:
     """The checkout the tests belong to (the package itself may be installed elsewhere)."""
     r = Path(__file__).resolve().parents[1]
-    assert (r / "fmu_src" / "djl_core.c").is_file(), r
+    assert (r / "fmu_src" / "djl_core.h").is_file(), r
     return r
 
 

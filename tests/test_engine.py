@@ -28,10 +28,13 @@ from harness import _engine
 from harness._resources import fmu_src_dir
 from harness.cosim import Session
 from harness.engine import FastAxis, PlanError, cosimulate_fast, map_error_residuals
+from harness.fmu.codegen import CORE_SOURCES
 from harness.fmu.runner import FMUError, GeneratorFMU
 from harness.planner import AxisFMU, sync_z_velocity
 from harness.plant import step_mode_jerk
 from harness.scenario import load_scenario
+
+CORE = [str(fmu_src_dir() / f) for f in CORE_SOURCES]
 
 REAL = ("x", "v", "a", "j", "x_AL", "v_AL", "a_AL")
 
@@ -271,7 +274,7 @@ def test_engine_source_is_clean_under_strict_c99(tmp_path):
         pytest.skip("not a source checkout")
     cmd = ["gcc", "-std=c99", "-O2", "-fPIC", "-shared", "-Wall", "-Wextra", "-Wpedantic",
            "-Werror", "-fvisibility=hidden", f"-I{sysconfig.get_paths()['include']}",
-           f"-I{fmu_src_dir()}", str(src), str(fmu_src_dir() / "djl_core.c"), "-o",
+           f"-I{fmu_src_dir()}", str(src), *CORE, "-o",
            str(tmp_path / "_engine.so"), "-lm"]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
@@ -329,7 +332,7 @@ def test_engine_under_asan_and_ubsan(tmp_path):
     cmd = ["gcc", "-std=c99", "-g", "-O1", "-fPIC", "-shared", "-fsanitize=address,undefined",
            "-fno-sanitize-recover=all", "-fno-omit-frame-pointer",
            f"-I{sysconfig.get_paths()['include']}", f"-I{fmu_src_dir()}", str(src),
-           str(fmu_src_dir() / "djl_core.c"), "-o", str(pkg / f"_engine{ext}"), "-lm"]
+           *CORE, "-o", str(pkg / f"_engine{ext}"), "-lm"]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     env = {**os.environ, "LD_PRELOAD": libasan, "PYTHONPATH": str(tmp_path),

@@ -134,7 +134,8 @@ def test_plans_are_the_same_with_libm(tmp_path):
     if shutil.which("gcc") is None:
         pytest.skip("gcc not available")
     exe = _build(tmp_path, "test_plan_libm",
-                 [C_DIR / "test_plan_libm.c", C_DIR / "core_libm.c", fmu_src_dir() / "djl_core.c"],
+                 [C_DIR / "test_plan_libm.c", C_DIR / "core_libm.c",
+                  *[fmu_src_dir() / f for f in codegen.CORE_SOURCES]],
                  ["-std=c99", "-O2", *WARN], [])
     proc = subprocess.run([str(exe), "300000", "3"], capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr[-3000:]

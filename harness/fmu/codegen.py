@@ -18,9 +18,12 @@ from xml.sax.saxutils import quoteattr
 from . import spec
 from .spec import VARIABLES, Variable
 
-SOURCES_COMMON = ("djl_core.c", "fmu_model.c")
+# the generator core (map in docs/generator.md): parameter checks, one segment (stages
+# sized, landing solved), a motion of segments, evaluation of samples
+CORE_SOURCES = ("djl_validate.c", "djl_segment.c", "djl_motion.c", "djl_eval.c")
+SOURCES_COMMON = CORE_SOURCES + ("fmu_model.c",)
 SOURCES = {2: SOURCES_COMMON + ("fmi2.c",), 3: SOURCES_COMMON + ("fmi3.c",)}
-HEADERS = ("djl_core.h", "djl_math.h", "djl_vars.h", "fmu_model.h")
+HEADERS = ("djl_core.h", "djl_internal.h", "djl_math.h", "djl_vars.h", "fmu_model.h")
 
 DESCRIPTION = (
     "Sampled acceleration-limited (AL), jerk-limited (JL) and dissociated jerk-limited (DJL) "

@@ -1,9 +1,12 @@
 /*
- * core_libm.c -- the planner of fmu_src/djl_core.c compiled with libm's math
+ * core_libm.c -- the planner of fmu_src/djl_*.c compiled with libm's math
  * (-DDJL_USE_LIBM: djl_math.h maps djl_floor to floor, ...), its functions
  * renamed libm_djl_*, so that tests/c/test_plan_libm.c can link it beside the
  * FMU's own core and compare their plans.  (A function added to the core's
- * interface and not renamed here makes the link fail: add it below.)
+ * interface and not renamed here makes the link fail: add it below.)  The
+ * core's files are compiled here as one unit, the functions they share
+ * (DJL_INTERNAL, djl_internal.h) made static: they do not clash with the
+ * FMU's own core's.
  */
 #define DJL_USE_LIBM
 #define djl_status_name libm_djl_status_name
@@ -14,4 +17,9 @@
 #define djl_applied_jerk_time libm_djl_applied_jerk_time
 #define djl_motion_time libm_djl_motion_time
 
-#include "djl_core.c"
+#define DJL_INTERNAL static
+
+#include "djl_validate.c"
+#include "djl_segment.c"
+#include "djl_motion.c"
+#include "djl_eval.c"

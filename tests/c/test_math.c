@@ -454,7 +454,8 @@ static void test_exp2(long n)
     stat_t s = {"exp2", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}, sg = {"exp2 grid", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
     long i;
     int g, p;
-    /* the planner's arguments (djl_core.c: solve_b23_once, solve_fit) */
+    /* the planner's arguments (djl_segment.c: solve_monotone_or_dip_once,
+       solve_fit_peak_grid) */
     for (p = 0; p <= 60; p++) exact_result(&sg, -p / 3.0, 0.0, djl_exp2(-p / 3.0), lm_exp2(-p / 3.0));
     for (p = 0; p <= 96; p++) exact_result(&sg, -p / 4.0, 0.0, djl_exp2(-p / 4.0), lm_exp2(-p / 4.0));
     for (i = 0; i < N_SPECIAL; i++) check_exp2(&s, dbl(special_bits[i]));

@@ -2,7 +2,7 @@
  * test_plan_libm.c -- the planner makes the same plans, bit for bit, with the
  * math of fmu_src/djl_math.h (the FMU's, no libm) as with libm's.
  *
- * Linked with fmu_src/djl_core.c and tests/c/core_libm.c (the same core
+ * Linked with fmu_src/djl_*.c and tests/c/core_libm.c (the same core
  * compiled with -DDJL_USE_LIBM, its functions renamed libm_djl_*).  For each
  * random parameter set of test_core.c's families (classic, grid, extreme:
  * the same generators, included from there, 10 % of the sets spoiled), both

@@ -1,0 +1,52 @@
+/*
+ * djl_eval.c -- a sample of a plan: djl_eval evaluates the piece in force at
+ * a time (in samples, possibly fractional), and the plan's durations.
+ */
+#include "djl_internal.h"
+
+/* ------------------------------------------------------------------------ */
+/* evaluation                                                               */
+
+void djl_eval(const djl_plan *pl, double u, int32_t *cursor, djl_sample *o)
+{
+    const djl_params *p = &pl->p;
+    int32_t i = cursor ? *cursor : 0;
+    const djl_piece *pc;
+    double s;
+    if (!(u >= 0.0)) {
+        s = u * p->Te;
+        o->x = p->x0 + p->v0 * s;
+        o->v = p->v0;
+        o->a = 0.0;
+        o->j = 0.0;
+        o->x_al = o->x;
+        o->v_al = p->v0;
+        o->a_al = 0.0;
+        o->done = 0;
+        o->segment = 0;
+        return;
+    }
+    if (i < 0 || i >= pl->n_pieces) i = 0;
+    while (i + 1 < pl->n_pieces && u >= (double)pl->piece[i + 1].k) i++;
+    while (i > 0 && u < (double)pl->piece[i].k) i--;
+    if (cursor) *cursor = i;
+    pc = &pl->piece[i];
+    s = (u - (double)pc->k) * p->Te;
+    o->x = p->x0 + (pc->x + s * (pc->v + s * (0.5 * pc->a + s * pc->j / 6.0)));
+    o->v = pc->v + s * (pc->a + 0.5 * s * pc->j);
+    o->a = pc->a + s * pc->j;
+    o->j = pc->j;
+    o->x_al = p->x0 + (pc->x_al + s * (pc->v_al + 0.5 * s * pc->a_al));
+    o->v_al = pc->v_al + s * pc->a_al;
+    o->a_al = pc->a_al;
+    o->done = u >= (double)pl->k_end;
+    o->segment = pc->seg;
+}
+
+double djl_applied_jerk_time(const djl_plan *plan, int stage)
+{
+    if (stage < 0 || stage > 3) return 0.0;
+    return plan->N[stage] * plan->p.Te;
+}
+
+double djl_motion_time(const djl_plan *plan) { return (double)plan->k_end * plan->p.Te; }
