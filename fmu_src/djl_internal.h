@@ -31,6 +31,20 @@
 #define DJL_INTERNAL
 #endif
 
+/* No contraction of a*b + c into a fused multiply-add, whatever the compiler's
+ * default (GCC's GNU dialects, clang's fp-contract=on, any target with FMA): the
+ * planner's exact landing is derived, and tested, for separately rounded products
+ * and sums; with FMA contraction its self-check fails on some plans with jerk
+ * times of 10^7 samples (tests/test_c_sanitizers.py builds the core with
+ * -mfma -ffp-contract=fast to check this pragma). */
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF
+#elif defined(__GNUC__)
+#pragma GCC optimize("fp-contract=off")
+#elif defined(_MSC_VER)
+#pragma fp_contract(off)
+#endif
+
 #if defined(__GNUC__) && __GNUC__ >= 4
 #pragma GCC visibility push(hidden)
 #endif

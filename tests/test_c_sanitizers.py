@@ -7,6 +7,7 @@ fmu_src/djl_math.h against libm.
 
 from __future__ import annotations
 
+import platform
 import shutil
 import subprocess
 from pathlib import Path
@@ -103,3 +104,28 @@ def test_time_masters_run_to_the_end(tmp_path):
                           timeout=600)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "100000000 steps per master" in proc.stdout and "0 failures" in proc.stdout
+
+
+def _cpu_has_fma() -> bool:
+    try:
+        return " fma " in Path("/proc/cpuinfo").read_text().replace("\n", " ") + " "
+    except OSError:
+        return False
+
+
+def test_core_plans_the_same_with_fma_contraction_allowed(tmp_path):
+    """The core forbids a*b + c -> fma contraction itself (djl_internal.h), whatever the
+    compiler's flags: built with -mfma -ffp-contract=fast it still makes no internal error.
+
+    Without the pragma this run (seed 5, extreme magnitudes) fails its self-check at case
+    30520 (jerk times of 10^7 samples); a build that cannot run FMA code is skipped.
+    """
+    if shutil.which("gcc") is None:
+        pytest.skip("gcc not available")
+    if platform.machine() not in ("x86_64", "AMD64") or not _cpu_has_fma():
+        pytest.skip("this CPU has no FMA instructions")
+    exe = _compile("test_core", tmp_path, ["-O2", "-mfma", "-ffp-contract=fast"])
+    proc = subprocess.run([str(exe), "100000", "5", "extreme"], capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "0 failures" in proc.stdout

@@ -108,3 +108,23 @@ def test_cross_check_files_beside_an_fmu(tmp_path):
     assert sorted(p.name for p in paths) == [f"{REF}.csv", f"{REF}.opt"]
     header = paths[0].read_text().splitlines()[0]
     assert header == ",".join(f'"{n}"' for n in ("time", *artefacts.REF_OUTPUTS))
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_reference_without_the_compiled_core(fmus, version, tmp_path, monkeypatch):
+    """`python -m harness.cli build` from a source checkout cannot import harness._engine
+    (the extension is installed elsewhere): the reference then comes from the FMU's own
+    binary, the same samples bit for bit."""
+    import sys
+
+    with zipfile.ZipFile(fmus[version]) as z:
+        z.extractall(tmp_path)
+    time1, rows1 = artefacts.reference_result()
+    import harness
+
+    monkeypatch.setitem(sys.modules, "harness._engine", None)  # import blocked
+    monkeypatch.delattr(harness, "_engine", raising=False)
+    with pytest.raises(ImportError):
+        artefacts.reference_result()
+    time2, rows2 = artefacts.reference_result(fmu_dir=tmp_path)
+    assert time2 == time1 and rows2 == rows1

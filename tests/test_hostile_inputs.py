@@ -279,8 +279,12 @@ def _tmp_dirs() -> set[Path]:
     return set(Path(tempfile.gettempdir()).glob("djl-fmu-*"))
 
 
-def test_generator_fmu_never_leaves_its_copy(tmp_path, bad_fmus):
+def test_generator_fmu_never_leaves_its_copy(tmp_path, bad_fmus, monkeypatch):
     from harness.fmu.runner import GeneratorFMU
+
+    # a temporary folder of its own: other processes' copies in /tmp do not count
+    (tmp_path / "tmp").mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
 
     before = _tmp_dirs()
     with GeneratorFMU() as g:

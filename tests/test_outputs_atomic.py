@@ -313,7 +313,7 @@ def test_sigterm_to_the_cli_process(tmp_path):
     scen.write_text('name = "s"\n' + SMALL_AXIS)
     proc = subprocess.run([sys.executable, "-c", code, "simulate", str(scen), "-o", str(out),
                            "--no-plot", "-q"], capture_output=True, text=True,
-                          cwd=Path(__file__).parents[1], timeout=600)
+                          cwd=tmp_path, timeout=600)  # the installed package, not the sources
     assert proc.returncode == 143, proc.stderr
     assert "terminated" in proc.stderr and "Traceback" not in proc.stderr
     assert _snapshot(out) == before
