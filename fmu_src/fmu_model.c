@@ -271,10 +271,6 @@ static double ulp(double x)
     return djl_nextafter(x, DJL_HUGE_VAL) - x;
 }
 
-#ifndef DJL_MAX_POSITION
-#define DJL_MAX_POSITION 1e300
-#endif
-
 /* No output may overflow at any time the FMU can reach (n <= DJL_MAX_MOTION_SAMPLES):
  * refuse, naming the parameters, a set whose time, or position before the start (at v0)
  * or after the end (at the end velocity), would exceed DJL_MAX_POSITION.  During the

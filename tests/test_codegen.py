@@ -68,6 +68,13 @@ def test_token_changes_with_the_interface(monkeypatch):
 def test_core_capacity_matches_spec():
     core = (fmu_src_dir() / "djl_core.h").read_text()
     assert f"#define DJL_MAX_SEGMENTS {spec.MAX_SEGMENTS}" in core
+    # the bounds the model descriptions declare are the ones the C code enforces
+    assert f"#define DJL_MAX_FILTER_SAMPLES {spec.MAX_FILTER_SAMPLES}" in core
+    position = re.search(r"#define DJL_MAX_POSITION (\S+)", core).group(1)
+    assert float(position) == spec.MAX_POSITION
+    horizon = int(re.search(r"#define DJL_MAX_MOTION_SAMPLES (\d+)LL", core).group(1))
+    # fmu_model.c refuses Te * DJL_MAX_MOTION_SAMPLES > DJL_MAX_POSITION: MAX_TE passes
+    assert spec.MAX_TE * horizon <= spec.MAX_POSITION
 
 
 def test_readme_variable_table_is_current(root):

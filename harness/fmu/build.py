@@ -494,7 +494,6 @@ def build_fmu(fmi_version: int, out_path: str | os.PathLike, *,
             shutil.copyfile(modeldesc_dir() / "fmi3" / "buildDescription.xml",
                             root / "sources" / "buildDescription.xml")
         build_binaries(fmi_version, root, names, cc=cc, extra_cflags=extra_cflags)
-        (root / "documentation" / "index.html").write_text(_documentation(fmi_version))
         from .artefacts import write_artefacts
 
         write_artefacts(root, fmi_version)
@@ -508,30 +507,6 @@ def build_fmu(fmi_version: int, out_path: str | os.PathLike, *,
         finally:
             tmp_zip.unlink(missing_ok=True)
     return out_path
-
-
-def _documentation(fmi_version: int) -> str:
-    rows = "\n".join(
-        f"<tr><td><code>{v.name}</code>{'[' + str(v.size) + ']' if v.size > 1 else ''}</td>"
-        f"<td>{v.causality}</td><td>{v.type}</td><td>{v.unit or '-'}</td>"
-        f"<td>{'' if v.start is None else v.start}</td><td>{v.description}</td></tr>"
-        for v in spec.VARIABLES
-    )
-    return f"""<!DOCTYPE html>
-<html><head><meta charset="utf-8"><title>{spec.MODEL_NAME}</title></head>
-<body>
-<h1>{spec.MODEL_NAME} (FMI {fmi_version}.0, co-simulation)</h1>
-<p>{codegen.DESCRIPTION}</p>
-<p>Any communication step h &gt; 0 is accepted. Outputs at a communication point are the exact
-values of the planned profile at that time (x, v, a of the piecewise cubic; j and a_al of the
-sampling interval of <code>Te</code> that contains it); a step that is a whole multiple of
-<code>Te</code> gives the samples themselves.</p>
-<table border="1" cellpadding="3">
-<tr><th>name</th><th>causality</th><th>type</th><th>unit</th><th>start</th><th>meaning</th></tr>
-{rows}
-</table>
-</body></html>
-"""
 
 
 def _sources_digest(fmi_version: int, cc: str, extra_cflags: tuple[str, ...]) -> str:
