@@ -36,6 +36,9 @@ extern "C" {
 #define DJL_MAX_SEGMENTS 32
 #define DJL_MAX_STEPS (4 * DJL_MAX_SEGMENTS)
 #define DJL_MAX_PIECES (2 * DJL_MAX_STEPS + DJL_MAX_SEGMENTS + 2)
+/* Steps a plan records (a replanned move: the ramps still running, the steps
+ * that end a stage or stop, and those of the new move). */
+#define DJL_MAX_PLAN_STEPS (DJL_MAX_STEPS + 8)
 /* Longest filter accepted, in samples. */
 #define DJL_MAX_FILTER_SAMPLES 100000000
 /* Longest motion accepted, in samples (keeps every sample index exact in a double). */
@@ -98,7 +101,19 @@ typedef struct {
     double x, v, a, j;        /* generated profile at k (x relative to x0); j constant over the piece */
     double x_al, v_al, a_al;  /* AL profile (filter input) at k (x_al relative to x0) */
     int32_t seg;              /* 1-based segment of the AL profile */
+    int32_t stage;            /* constant-jerk stage of the ramp started last among those
+                                 running over the piece (1..4), 0 if none runs */
 } djl_piece;
+
+/* One step of the AL profile: its acceleration A, filtered by a moving average
+ * of N samples, is a ramp of jerk A / (N Te) from sample tau to tau + N. */
+typedef struct {
+    int64_t tau;   /* sample (relative to the plan's start; negative: before it) */
+    double A;      /* m/s^2 */
+    int32_t N;     /* filter length, samples (0: unfiltered) */
+    int32_t stage; /* 1 start of acceleration, 2 end of acceleration, 3 start of
+                      deceleration, 4 end of deceleration */
+} djl_step;
 
 /* What the planner decided for one segment (for logs and diagnostics). */
 typedef struct {
@@ -129,6 +144,14 @@ typedef struct {
     double x_target;              /* m, x0 + total distance */
     double v_target;              /* m/s, requested end velocity */
     double v_reached, a_reached, d_reached; /* largest |v_peak|, acceleration and deceleration levels */
+    /* The AL steps of the plan (what a replan keeps of it): every step of a
+     * planned motion; for a replanned one (djl_replan) the ramps that were still
+     * running at the command and the steps placed since.  level0 is the AL
+     * acceleration of the steps not listed (0 for a planned motion). */
+    int32_t n_steps;
+    int32_t replanned;            /* 0: planned from p by djl_plan_motion; 1: by djl_replan */
+    double level0;
+    djl_step step[DJL_MAX_PLAN_STEPS];
 } djl_plan;
 
 typedef struct {
@@ -136,6 +159,7 @@ typedef struct {
     double x_al, v_al, a_al; /* AL profile before filtering */
     int32_t done;            /* 1 once the motion, filters included, has ended */
     int32_t segment;         /* 1-based segment of the AL profile at this time, 0 before the start */
+    int32_t stage;           /* constant-jerk stage in progress (1..4), 0 when none */
 } djl_sample;
 
 /* Default parameters (a 0.4 m DJL move). */
@@ -159,6 +183,63 @@ double djl_applied_jerk_time(const djl_plan *plan, int stage);
 double djl_motion_time(const djl_plan *plan);
 
 const char *djl_status_name(djl_status s);
+
+/* ------------------------------------------------------------------------ */
+/* replanning a move in progress (djl_replan.c)                              */
+
+typedef enum { DJL_GOAL_TARGET = 1, DJL_GOAL_STOP = 2 } djl_goal_kind;
+
+/* What a replan must do from sample b on. */
+typedef struct {
+    int32_t kind;   /* djl_goal_kind */
+    double target;  /* m, absolute position to end at, at rest (DJL_GOAL_TARGET) */
+    int32_t N[4];   /* jerk times of the stages to come, samples (all 0: AL) */
+    int32_t keep_speed;    /* the new motion goes no faster than the old plan's peak (or
+                              the axis now), if it can (new jerk times for the same target:
+                              the landing is re-timed, a cruise is not raised) */
+    int32_t no_stop_first; /* refuse (DJL_E_INFEASIBLE, *out untouched) a replan that would
+                              stop and then come back (new jerk times that no longer land
+                              from where the axis is: the caller keeps its plan) */
+} djl_goal;
+
+/* What a replan decided (for logs and diagnostics). */
+typedef struct {
+    int64_t origin;     /* whole sample of the old plan the new one starts at (floor(u)) */
+    int64_t b;          /* first sample whose steps may change (floor(u) + 1) */
+    int64_t end_at;     /* sample of the step ending the stage in progress (-1: none) */
+    int32_t how;        /* 1 new move after the stage in progress ends; 2 stop and then move;
+                           3 stop */
+    int32_t clipped;    /* the ending stage's jerk time was changed to stay within v_max */
+    int32_t lengthened; /* ... lengthened, so as not to end before the ramp that started the
+                           stage (still running at b) */
+    double v_settled;   /* m/s, velocity once the ramps running have ended */
+} djl_replan_info;
+
+/* Replan the motion of *old at the (possibly fractional) time u, in samples
+ * of old, towards goal: the outputs of *old up to the first sample after u,
+ * b = floor(u) + 1, stay as they are (the jerk reported at u holds until b),
+ * every ramp started before b finishes as started, the AL stage in progress
+ * ends at b (or, speeding up towards the target, goes on as long as v_max and
+ * the room to stop allow), and the rest is a new move planned from the state
+ * reached, ending exactly at the target at rest (or at rest for a stop).  The
+ * new plan, written to *out (which may be old), starts at sample origin =
+ * floor(u) of the old one; scratch is work space.  No allocation; bounded
+ * work. */
+djl_status djl_replan(const djl_plan *old, double u, const djl_goal *goal, djl_plan *out,
+                      djl_plan *scratch, djl_replan_info *info, djl_error *err);
+
+/* Jerk times N (read from a frequency, each stage taking the value in force
+ * when it starts): is a replan due for the samples after u up to u_end?
+ * Returns 1 and *at (the time to replan at, djl_replan) when a stage still to
+ * come was planned with another jerk time and either
+ *  - now (allow_now) the axis cruises, rests or speeds up at a level of at
+ *    least a_max / 2: *at = u (the stages to come are placed anew before they
+ *    start), or
+ *  - such a stage starts at a sample tau in (u, floor(u_end) + 1): *at = tau - 1
+ *    (the first such stage).
+ * Returns 0 otherwise. */
+int djl_jerk_times_due(const djl_plan *plan, double u, double u_end, const int32_t N[4],
+                       int allow_now, double *at);
 
 #ifdef __cplusplus
 }

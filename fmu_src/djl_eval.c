@@ -24,6 +24,7 @@ void djl_eval(const djl_plan *pl, double u, int32_t *cursor, djl_sample *o)
         o->a_al = 0.0;
         o->done = 0;
         o->segment = 0;
+        o->stage = 0;
         return;
     }
     if (i < 0 || i >= pl->n_pieces) i = 0;
@@ -41,6 +42,7 @@ void djl_eval(const djl_plan *pl, double u, int32_t *cursor, djl_sample *o)
     o->a_al = pc->a_al;
     o->done = u >= (double)pl->k_end;
     o->segment = pc->seg;
+    o->stage = pc->stage;
 }
 
 double djl_applied_jerk_time(const djl_plan *plan, int stage)

@@ -12,9 +12,11 @@
  *   djl_motion.c    a motion of segments (djl_plan_motion): the segments
  *                   sized one after the other, the last one landed exactly,
  *                   the AL steps, the pieces of the plan, the retries
+ *   djl_replan.c    a move in progress replanned (djl_replan): the ramps
+ *                   started kept, the stage in progress ended, a new segment
+ *                   planned from the state the ramps settle to; and when jerk
+ *                   times read from a frequency call for it (djl_jerk_times_due)
  *   djl_eval.c      a sample of a plan (djl_eval)
- *   (replanning a move in progress: not written yet; its place is a file of
- *   its own, djl_replan.c, beside djl_motion.c)
  *
  * Functions shared between the files are declared DJL_INTERNAL: external and
  * hidden (the visibility pragma below), so the FMU exports none of them.

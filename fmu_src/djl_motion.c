@@ -7,6 +7,7 @@
  */
 #include "djl_internal.h"
 
+#include <stddef.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -21,6 +22,7 @@ typedef struct {
     double level;   /* AL acceleration right after this step */
     int phase_end;  /* ends a phase: v_after is the velocity once it has settled */
     double v_after;
+    int32_t stage;  /* 1..4 (djl_step) */
 } al_step;
 
 typedef struct {
@@ -260,11 +262,12 @@ static djl_status check_duration(const djl_params *p, int i, djl_error *err)
 }
 
 static void add_step(motion_work *w, int64_t tau, double A, int32_t N, double level, int phase_end,
-                     double v_after)
+                     double v_after, int32_t stage)
 {
     al_step *st;
     if (A == 0.0) return;
     st = &w->step[w->n_steps++];
+    st->stage = stage;
     st->tau = tau;
     st->A = A;
     st->N = N;
@@ -413,11 +416,13 @@ static djl_status walk_pieces(const motion_work *w, djl_plan *plan, const djl_pa
             last_seg_start++;
         }
         seg = last_seg_start + 1;
+        pc->stage = 0;
         for (q = 0; q < w->n_steps; q++) {
             const al_step *sq = &w->step[q];
             if (sq->N > 0 && sq->tau <= b && b < sq->tau + sq->N) {
                 jerk += sq->A / (sq->N * p->Te);
                 quiet = 0;
+                pc->stage = sq->stage; /* steps are in time order: the last started */
             }
         }
         if (quiet) a = level;
@@ -469,9 +474,23 @@ static djl_status walk_pieces(const motion_work *w, djl_plan *plan, const djl_pa
 static void setup_motion(const djl_params *p, const djl_params *user, int kl, djl_plan *plan,
                          motion_work *w, int32_t N[4], double *scale)
 {
-    int n, i;
-    memset(plan, 0, sizeof(*plan));
-    memset(w, 0, sizeof(*w));
+    int n = p->n_segments == 0 ? 1 : p->n_segments, i;
+    /* Cleared: what the phases read before writing it (the segments' problems and
+     * solutions, the plan's header, its segments and its running totals); not the
+     * large arrays of pieces and steps, written before they are read (a replan
+     * plans a new move in a few microseconds, half of them went to clearing 46 kB). */
+    memset(plan, 0, offsetof(djl_plan, seg) + (size_t)n * sizeof(plan->seg[0]));
+    plan->n_pieces = 0;
+    memset(&plan->k_end, 0, offsetof(djl_plan, step) - offsetof(djl_plan, k_end));
+    memset(w->c, 0, (size_t)n * sizeof(w->c[0]));
+    memset(w->s, 0, (size_t)n * sizeof(w->s[0]));
+    memset(w->sigma, 0, sizeof w->sigma);
+    memset(w->empty, 0, sizeof w->empty);
+    memset(w->Dreal, 0, sizeof w->Dreal);
+    memset(w->vS, 0, sizeof w->vS);
+    memset(w->vE, 0, sizeof w->vE);
+    w->n_steps = 0;
+    w->lead = 0;
     w->user = user;
     w->kl = kl;
     plan->p = *p;
@@ -482,7 +501,6 @@ static void setup_motion(const djl_params *p, const djl_params *user, int kl, dj
         plan->N[i] = N[i];
     }
 
-    n = p->n_segments == 0 ? 1 : p->n_segments;
     plan->n_segments = n;
     w->lead = !(N[0] == N[1] && N[1] == N[2] && N[2] == N[3]);
     *scale = djl_fabs(p->v0) * p->Te;
@@ -599,24 +617,25 @@ static int64_t build_al_steps(motion_work *w, djl_plan *plan, int n)
             int64_t t0 = S + s->g + (s->after ? 0 : s->k);
             int64_t nn = s->hasA ? s->n1 : s->m;
             double vend = w->vE[i];
+            int32_t sa = s->hasA ? 1 : 3, sb = s->hasA ? 2 : 4; /* the stages */
             if (s->split == 0) {
-                add_step(w, t0, sg * lv, Na, sg * lv, 0, 0.0);
-                add_step(w, t0 + nn, -sg * (lv - fl), Nb, sg * fl, fl == 0.0, vend);
-                add_step(w, t0 + nn + 1, -sg * fl, Nb, 0.0, 1, vend);
+                add_step(w, t0, sg * lv, Na, sg * lv, 0, 0.0, sa);
+                add_step(w, t0 + nn, -sg * (lv - fl), Nb, sg * fl, fl == 0.0, vend, sb);
+                add_step(w, t0 + nn + 1, -sg * fl, Nb, 0.0, 1, vend, sb);
             } else {
-                add_step(w, t0, sg * (lv - fl), Na, sg * (lv - fl), 0, 0.0);
-                add_step(w, t0 + 1, sg * fl, Na, sg * lv, 0, 0.0);
-                add_step(w, t0 + nn + 1, -sg * lv, Nb, 0.0, 1, vend);
+                add_step(w, t0, sg * (lv - fl), Na, sg * (lv - fl), 0, 0.0, sa);
+                add_step(w, t0 + 1, sg * fl, Na, sg * lv, 0, 0.0, sa);
+                add_step(w, t0 + nn + 1, -sg * lv, Nb, 0.0, 1, vend, sb);
             }
         } else {
             if (s->hasA) {
-                add_step(w, S + s->g, sg * s->al, s->N1, sg * s->al, 0, 0.0);
-                add_step(w, S + s->g + s->n1, -sg * s->al, s->N2, 0.0, 1, sg * s->vp);
+                add_step(w, S + s->g, sg * s->al, s->N1, sg * s->al, 0, 0.0, 1);
+                add_step(w, S + s->g + s->n1, -sg * s->al, s->N2, 0.0, 1, sg * s->vp, 2);
             }
             if (s->hasD) {
                 int64_t t3 = S + s->g + (s->hasA ? s->n1 : 0) + s->k;
-                add_step(w, t3, -sg * s->dl, s->N3, -sg * s->dl, 0, 0.0);
-                add_step(w, t3 + s->m, sg * s->dl, s->N4, 0.0, 1, w->vE[i]);
+                add_step(w, t3, -sg * s->dl, s->N3, -sg * s->dl, 0, 0.0, 3);
+                add_step(w, t3 + s->m, sg * s->dl, s->N4, 0.0, 1, w->vE[i], 4);
             }
         }
         if (djl_fabs(s->vp) > plan->v_reached) plan->v_reached = djl_fabs(s->vp);
@@ -716,6 +735,14 @@ static djl_status plan_in_units(const djl_params *p, const djl_params *user, int
     if (st != DJL_OK) {
         st = walk_pieces(&w, plan, p, n, nb, 10.0 * tolx, scale, 1, err);
         if (st == DJL_OK && err) memset(err, 0, sizeof(*err));
+    }
+    /* the steps, for a replan (djl_replan.c) */
+    plan->n_steps = w.n_steps;
+    for (i = 0; i < w.n_steps; i++) {
+        plan->step[i].tau = w.step[i].tau;
+        plan->step[i].A = w.step[i].A;
+        plan->step[i].N = w.step[i].N;
+        plan->step[i].stage = w.step[i].stage;
     }
     return st;
 }
@@ -819,6 +846,7 @@ static djl_status plan_scaled(const djl_params *p, int kl, int kt, djl_plan *pla
         pc->a_al = djl_ldexp(pc->a_al, -ea);
         big = dmax2(big, djl_fabs(pc->j));
     }
+    for (i = 0; i < plan->n_steps; i++) plan->step[i].A = djl_ldexp(plan->step[i].A, -ea);
     plan->piece[plan->n_pieces - 1].v = plan->v_target;
     if (djl_isfinite(big) && !plan_clean(plan)) {
         /* values of the motion itself below the normal doubles: it is too

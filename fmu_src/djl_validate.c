@@ -84,11 +84,27 @@ static djl_status check_positive(djl_error *err, const char *name, double v, con
     return DJL_OK;
 }
 
+/* Names of segment i's distance, end velocity and start velocity. */
+static void segment_names(const djl_params *p, int i, char dname[40], char vname[40],
+                          char sname[40])
+{
+    if (p->n_segments == 0) {
+        snprintf(dname, 40, "distance");
+        snprintf(vname, 40, "v_e");
+    } else {
+        snprintf(dname, 40, "seg_distance[%d]", i + 1);
+        snprintf(vname, 40, "seg_v_end[%d]", i + 1);
+    }
+    if (i == 0)
+        snprintf(sname, 40, "v0");
+    else
+        snprintf(sname, 40, "seg_v_end[%d]", i);
+}
+
 djl_status djl_validate(const djl_params *p, djl_error *err)
 {
     djl_status st;
     int i, n;
-    char name[40];
     double reach;
 
     if (p->profile < DJL_PROFILE_AL || p->profile > DJL_PROFILE_DJL)
@@ -103,8 +119,9 @@ djl_status djl_validate(const djl_params *p, djl_error *err)
     if ((st = check_positive(err, "a_max", p->a_max, "m/s2")) != DJL_OK) return st;
     if ((st = check_positive(err, "d_max", p->d_max, "m/s2")) != DJL_OK) return st;
     for (i = 0; i < 4; i++) {
+        static const char *const tf[4] = {"T_F1", "T_F2", "T_F3", "T_F4"};
         double T = p->T_F[i];
-        snprintf(name, sizeof name, "T_F%d", i + 1);
+        const char *name = tf[i];
         if ((st = check_positive(err, name, T, "s")) != DJL_OK) return st;
         if (stage_used(p->profile, i)) {
             double N = djl_floor(T / p->Te + 0.5);
@@ -140,57 +157,51 @@ djl_status djl_validate(const djl_params *p, djl_error *err)
         double ve = p->n_segments == 0 ? p->v_e : p->seg_v_end[i];
         double vs = i == 0 ? p->v0 : p->seg_v_end[i - 1];
         char dname[40], vname[40], sname[40];
-        if (p->n_segments == 0) {
-            snprintf(dname, sizeof dname, "distance");
-            snprintf(vname, sizeof vname, "v_e");
-        } else {
-            snprintf(dname, sizeof dname, "seg_distance[%d]", i + 1);
-            snprintf(vname, sizeof vname, "seg_v_end[%d]", i + 1);
-        }
-        if (i == 0)
-            snprintf(sname, sizeof sname, "v0");
-        else
-            snprintf(sname, sizeof sname, "seg_v_end[%d]", i);
+        /* the names, for the messages: written only when a check fails (a replan
+         * validates a new motion in its few microseconds) */
+#define NAMES() segment_names(p, i, dname, vname, sname)
         if (!djl_isfinite(D))
-            return set_error(err, DJL_E_PARAM, dname, D, "%s = %g m: must be finite", dname, D);
+            return NAMES(), set_error(err, DJL_E_PARAM, dname, D, "%s = %g m: must be finite",
+                                      dname, D);
         if (D != 0.0 && djl_fabs(D) < DJL_MIN_MAGNITUDE)
-            return set_error(err, DJL_E_PARAM, dname, D,
+            return NAMES(), set_error(err, DJL_E_PARAM, dname, D,
                              "%s = %g m: a non-zero distance must be at least %g m in magnitude "
                              "(a subnormal double has too few significant digits to be planned "
                              "exactly)", dname, D, DJL_MIN_MAGNITUDE);
         reach += djl_fabs(D);
         if (reach > DJL_MAX_POSITION)
-            return set_error(err, DJL_E_PARAM, dname, D,
+            return NAMES(), set_error(err, DJL_E_PARAM, dname, D,
                              "%s = %g m: |x0| + the sum of |distance| up to it is %g m, more than "
                              "the %g m a motion may span", dname, D, reach, DJL_MAX_POSITION);
         if (!djl_isfinite(ve) || djl_fabs(ve) > p->v_max)
-            return set_error(err, DJL_E_PARAM, vname, ve,
+            return NAMES(), set_error(err, DJL_E_PARAM, vname, ve,
                              "%s = %g m/s: must be finite and not above v_max = %g m/s in "
                              "magnitude", vname, ve, p->v_max);
         if (D > 0.0 && ve < 0.0)
-            return set_error(err, DJL_E_PARAM, vname, ve,
+            return NAMES(), set_error(err, DJL_E_PARAM, vname, ve,
                              "%s = %g m/s points backwards while %s = %g m moves forwards: the "
                              "velocity must be 0 where the direction reverses", vname, ve, dname, D);
         if (D < 0.0 && ve > 0.0)
-            return set_error(err, DJL_E_PARAM, vname, ve,
+            return NAMES(), set_error(err, DJL_E_PARAM, vname, ve,
                              "%s = %g m/s points forwards while %s = %g m moves backwards: the "
                              "velocity must be 0 where the direction reverses", vname, ve, dname, D);
         if (D > 0.0 && vs < 0.0)
-            return set_error(err, DJL_E_PARAM, sname, vs,
+            return NAMES(), set_error(err, DJL_E_PARAM, sname, vs,
                              "%s = %g m/s points backwards while %s = %g m moves forwards: the "
                              "velocity must be 0 where the direction reverses", sname, vs, dname, D);
         if (D < 0.0 && vs > 0.0)
-            return set_error(err, DJL_E_PARAM, sname, vs,
+            return NAMES(), set_error(err, DJL_E_PARAM, sname, vs,
                              "%s = %g m/s points forwards while %s = %g m moves backwards: the "
                              "velocity must be 0 where the direction reverses", sname, vs, dname, D);
         if (D == 0.0 && (vs != 0.0 || ve != 0.0))
-            return set_error(err, DJL_E_PARAM, dname, D,
+            return NAMES(), set_error(err, DJL_E_PARAM, dname, D,
                              "%s = 0 m with a non-zero velocity at its start (%g m/s) or end "
                              "(%g m/s): a null segment must start and end at rest", dname, vs, ve);
         if (djl_fabs(D) / (p->v_max * p->Te) > 1e14)
-            return set_error(err, DJL_E_PARAM, dname, D,
+            return NAMES(), set_error(err, DJL_E_PARAM, dname, D,
                              "%s = %g m would take more than 1e14 samples at v_max = %g m/s and "
                              "Te = %g s", dname, D, p->v_max, p->Te);
     }
+#undef NAMES
     return DJL_OK;
 }

@@ -4,7 +4,7 @@
 #define DJL_VARS_H
 
 #define DJL_MODEL_IDENTIFIER "JerkLimitedTrajectory"
-#define DJL_INSTANTIATION_TOKEN "{419b19bb-fb9f-5005-996d-259d94590f08}"
+#define DJL_INSTANTIATION_TOKEN "{62cd93d6-3202-5f21-80fb-90de83e877fb}"
 #define DJL_VARS_MAX_SEGMENTS 32
 
 /* value references (arrays: first element; element i at base + i) */
@@ -35,6 +35,13 @@ typedef enum {
     VR_V_AL = 31,
     VR_A_AL = 32,
     VR_SEGMENT = 33,
+    VR_BUSY = 34,
+    VR_STAGE = 35,
+    VR_JERK_SOURCE = 24,
+    VR_TARGET = 50,
+    VR_EXECUTE = 51,
+    VR_STOP = 52,
+    VR_F_MODE = 53,
     VR_MOTION_TIME = 40,
     VR_N_F1 = 41,
     VR_N_F2 = 42,
@@ -61,7 +68,8 @@ typedef struct {
     unsigned int vr;
     char type;      /* 'R' Real/Float64, 'I' Integer/Int32, 'B' Boolean,
                        'E' Enumeration (stored as an integer; FMI 3: Int64) */
-    char causality; /* 'p' parameter, 'c' calculatedParameter, 'o' output, 't' time */
+    char causality; /* 'p' parameter, 'c' calculatedParameter, 'i' input, 'o' output,
+                       't' time */
     unsigned short size;
     const char *name;
 } djl_var_info;
@@ -93,6 +101,13 @@ static const djl_var_info djl_var_table[] = {
     {31u, 'R', 'o', 1, "v_AL"},
     {32u, 'R', 'o', 1, "a_AL"},
     {33u, 'I', 'o', 1, "segment"},
+    {34u, 'B', 'o', 1, "busy"},
+    {35u, 'I', 'o', 1, "stage"},
+    {24u, 'E', 'p', 1, "jerk_source"},
+    {50u, 'R', 'i', 1, "target"},
+    {51u, 'B', 'i', 1, "execute"},
+    {52u, 'B', 'i', 1, "stop"},
+    {53u, 'R', 'i', 1, "f_mode"},
     {40u, 'R', 'c', 1, "motion_time"},
     {41u, 'I', 'c', 1, "N_F1"},
     {42u, 'I', 'c', 1, "N_F2"},
@@ -104,7 +119,7 @@ static const djl_var_info djl_var_table[] = {
     {100u, 'R', 'p', 32, "seg_distance"},
     {200u, 'R', 'p', 32, "seg_v_end"},
 };
-#define DJL_N_VARS 36
+#define DJL_N_VARS 43
 
 static const char *const djl_log_category_names[] = {
     "logEvents",

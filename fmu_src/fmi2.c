@@ -426,7 +426,8 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
     (void)value;
     CHECK(c, "fmi2SetRealInputDerivatives", MASK_SET);
     if (nvr == 0) return fmi2OK;
-    model_fail(&INST(c)->m, "fmi2SetRealInputDerivatives: this FMU has no inputs");
+    model_fail(&INST(c)->m, "fmi2SetRealInputDerivatives: input derivatives are not used "
+               "(canInterpolateInputs is false: inputs are held over a step)");
     return fmi2Error;
 }
 

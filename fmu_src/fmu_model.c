@@ -97,6 +97,8 @@ static void defaults(model_data *d)
     d->t_start = 0.0;
     d->start_time = 0.0;
     d->state = MS_INSTANTIATED;
+    d->jerk_source = 1;
+    d->f_mode = 10.0;
 }
 
 void model_init(model_instance *m, int fmi_version, const char *instance_name,
@@ -171,6 +173,17 @@ int model_lookup(unsigned int vr, int fmi3, model_var *out)
     return 0;
 }
 
+/* The jerk time 1/f_mode in whole samples of Te (round to nearest), 0 if f_mode is
+ * not a frequency or its period is outside [Te/2, DJL_MAX_FILTER_SAMPLES Te]. */
+static int32_t jerk_samples(double f, double Te)
+{
+    double r;
+    if (!(djl_isfinite(f) && f > 0.0 && djl_isfinite(Te) && Te > 0.0)) return 0;
+    r = djl_floor(1.0 / (f * Te) + 0.5);
+    if (!(r >= 1.0 && r <= (double)DJL_MAX_FILTER_SAMPLES)) return 0;
+    return (int32_t)r;
+}
+
 static const char *type_name(char t)
 {
     return t == 'R' ? "Real" : t == 'I' ? "Integer" : t == 'B' ? "Boolean" : "?";
@@ -204,6 +217,7 @@ static int32_t *int_param(model_data *d, unsigned int base)
     case VR_PROFILE: return &d->p.profile;
     case VR_SHORT_STAGE: return &d->p.short_stage;
     case VR_N_SEGMENTS: return &d->p.n_segments;
+    case VR_JERK_SOURCE: return &d->jerk_source;
     default: return NULL;
     }
 }
@@ -316,10 +330,35 @@ static model_status ensure_plan(model_instance *m, const char *fn)
     double off;
     model_data *d = &m->d;
     if (d->planned) return ST_OK;
+    djl_params q = d->p;
     if (!djl_isfinite(d->t_start))
         return model_fail(m, "%s: invalid parameter t_start = %g s: must be finite", fn,
                           d->t_start);
-    st = djl_plan_motion(&d->p, &d->plan, &err);
+    if (d->jerk_source != 1 && d->jerk_source != 2)
+        return model_fail(m, "%s: invalid parameter jerk_source = %d: must be 1 (the jerk times "
+                          "T_F1..T_F4) or 2 (from the input f_mode)", fn, (int)d->jerk_source);
+    if (d->jerk_source == 2) {
+        int32_t Nf = jerk_samples(d->f_mode, d->p.Te);
+        int i;
+        if (d->p.profile == DJL_PROFILE_AL)
+            return model_fail(m, "%s: invalid parameter jerk_source = 2 with profile = 1 (AL): an "
+                              "AL profile has no jerk time to take from f_mode; use profile 2 "
+                              "or 3", fn);
+        if (d->p.n_segments != 0 || d->p.v_e != 0.0)
+            return model_fail(m, "%s: invalid parameter jerk_source = 2 with n_segments = %d and "
+                              "v_e = %g m/s: jerk times from f_mode are applied to single moves "
+                              "ending at rest (n_segments = 0, v_e = 0)", fn,
+                              (int)d->p.n_segments, d->p.v_e);
+        if (Nf == 0)
+            return model_fail(m, "%s: invalid input f_mode = %g Hz: with jerk_source = 2 its "
+                              "period must be between Te/2 and %d samples of Te = %g s", fn,
+                              d->f_mode, DJL_MAX_FILTER_SAMPLES, d->p.Te);
+        if (djl_validate(&q, &err) != DJL_OK)
+            return model_fail(m, "%s: %s: %s", fn, djl_status_name(DJL_E_PARAM), err.message);
+        q.profile = DJL_PROFILE_DJL;
+        for (i = 0; i < 4; i++) q.T_F[i] = (double)Nf * q.Te;
+    }
+    st = djl_plan_motion(&q, &d->plan, &err);
     if (st != DJL_OK)
         return model_fail(m, "%s: %s: %s", fn, djl_status_name(st), err.message);
     /* The generator samples at start_time + n Te: the motion starts at the
@@ -345,9 +384,45 @@ static model_status ensure_plan(model_instance *m, const char *fn)
     d->offset = off;
     d->cursor = 0;
     d->planned = 1;
+    d->goal = 0;
+    d->first.k_end = d->plan.k_end;
+    memcpy(d->first.N, d->plan.N, sizeof d->first.N);
+    d->first.v_reached = d->plan.v_reached;
+    d->first.a_reached = d->plan.a_reached;
+    d->first.d_reached = d->plan.d_reached;
     evaluate(d);
     log_plan(m);
     return ST_OK;
+}
+
+/* An input, in any state a set is allowed in: a value that is not one is refused,
+ * naming the input, and the previous value is kept. */
+static model_status set_input(model_instance *m, const model_var *v, double value)
+{
+    model_data *d = &m->d;
+    switch (v->base) {
+    case VR_TARGET:
+        if (!(djl_isfinite(value) && djl_fabs(value) <= DJL_MAX_POSITION))
+            return model_refuse(m, "set: invalid input target = %g m: must be finite and "
+                                "|target| <= %g m (the previous value, %g m, is kept)", value,
+                                DJL_MAX_POSITION, d->target);
+        d->target = value;
+        return ST_OK;
+    case VR_F_MODE:
+        if (!(djl_isfinite(value) && value > 0.0))
+            return model_refuse(m, "set: invalid input f_mode = %g Hz: must be a finite frequency "
+                                "> 0 (the previous value, %g Hz, is kept)", value, d->f_mode);
+        if (d->jerk_source == 2 && (d->state & MS_STEP) && jerk_samples(value, d->p.Te) == 0)
+            return model_refuse(m, "set: invalid input f_mode = %g Hz: its period, %g s, is "
+                                "outside [Te/2, %d Te] at Te = %g s (the previous value, %g Hz, "
+                                "is kept)", value, 1.0 / value, DJL_MAX_FILTER_SAMPLES, d->p.Te,
+                                d->f_mode);
+        d->f_mode = value;
+        return ST_OK;
+    case VR_EXECUTE: d->execute = value != 0.0; return ST_OK;
+    case VR_STOP: d->stop = value != 0.0; return ST_OK;
+    default: return model_fail(m, "set: internal error, no storage for input %s", v->name);
+    }
 }
 
 model_status model_set(model_instance *m, unsigned int vr, char type, double value)
@@ -359,6 +434,7 @@ model_status model_set(model_instance *m, unsigned int vr, char type, double val
     if (v.type != type)
         return model_fail(m, "set: %s (value reference %u) is a %s, not a %s", v.name, vr,
                           type_name(v.type), type_name(type));
+    if (v.causality == 'i') return set_input(m, &v, value);
     if (v.causality != 'p')
         return model_fail(m, "set: %s (value reference %u) is %s: it cannot be set", v.name, vr,
                           v.causality == 'o'   ? "an output"
@@ -431,6 +507,15 @@ model_status model_get(model_instance *m, unsigned int vr, char type, double *va
         *value = d->t_now;
         return ST_OK;
     }
+    if (v.causality == 'i') {
+        switch (v.base) {
+        case VR_TARGET: *value = d->target; break;
+        case VR_F_MODE: *value = d->f_mode; break;
+        case VR_EXECUTE: *value = d->execute; break;
+        default: *value = d->stop; break;
+        }
+        return ST_OK;
+    }
     if (v.causality == 'p') {
         if (type == 'R') {
             *value = *real_param(d, v.base, v.index);
@@ -454,14 +539,16 @@ model_status model_get(model_instance *m, unsigned int vr, char type, double *va
     case VR_V_AL: *value = d->out.v_al; break;
     case VR_A_AL: *value = d->out.a_al; break;
     case VR_SEGMENT: *value = (double)d->out.segment; break;
-    case VR_MOTION_TIME: *value = djl_motion_time(&d->plan); break;
-    case VR_N_F1: *value = (double)d->plan.N[0]; break;
-    case VR_N_F2: *value = (double)d->plan.N[1]; break;
-    case VR_N_F3: *value = (double)d->plan.N[2]; break;
-    case VR_N_F4: *value = (double)d->plan.N[3]; break;
-    case VR_V_REACHED: *value = d->plan.v_reached; break;
-    case VR_A_REACHED: *value = d->plan.a_reached; break;
-    case VR_D_REACHED: *value = d->plan.d_reached; break;
+    case VR_BUSY: *value = d->out.done ? 0.0 : 1.0; break;
+    case VR_STAGE: *value = (double)d->out.stage; break;
+    case VR_MOTION_TIME: *value = (double)d->first.k_end * d->p.Te; break;
+    case VR_N_F1: *value = (double)d->first.N[0]; break;
+    case VR_N_F2: *value = (double)d->first.N[1]; break;
+    case VR_N_F3: *value = (double)d->first.N[2]; break;
+    case VR_N_F4: *value = (double)d->first.N[3]; break;
+    case VR_V_REACHED: *value = d->first.v_reached; break;
+    case VR_A_REACHED: *value = d->first.a_reached; break;
+    case VR_D_REACHED: *value = d->first.d_reached; break;
     default: return model_fail(m, "get: internal error, no value for %s", v.name);
     }
     return ST_OK;
@@ -490,6 +577,8 @@ model_status model_exit_init(model_instance *m)
 {
     model_status st = ensure_plan(m, "ExitInitializationMode");
     if (st != ST_OK) return st;
+    m->d.execute_seen = m->d.execute; /* edges are counted from here */
+    m->d.stop_seen = m->d.stop;
     m->d.state = MS_STEP;
     return ST_OK;
 }
@@ -501,6 +590,123 @@ model_status model_exit_init(model_instance *m)
 static double time_tolerance(const model_data *d, double t)
 {
     return djl_fmax(1e-6 * d->p.Te, 4.0 * ulp(djl_fmax(djl_fabs(t), djl_fabs(d->t_now))));
+}
+
+static const char *const replan_how[] = {"", "the stage in progress ended, then a new move",
+                                         "a stop, then a new move from rest", "a stop"};
+
+/* Book-keeping and logs of a replan made. */
+static void replanned(model_instance *m, double t, const djl_goal *g,
+                      const djl_replan_info *info, const char *why)
+{
+    model_data *d = &m->d;
+    d->offset += (double)info->origin;
+    d->cursor = 0;
+    d->replans++;
+    model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
+              "t = %.17g s: %s: replanned from sample %lld (%s; stage ending at sample %lld, "
+              "settled velocity %.17g m/s), jerk times %d/%d/%d/%d samples, at rest %.17g s "
+              "after sample %lld", t, why, (long long)info->b,
+              replan_how[info->how >= 1 && info->how <= 3 ? info->how : 0],
+              (long long)info->end_at, info->v_settled, (int)g->N[0], (int)g->N[1],
+              (int)g->N[2], (int)g->N[3], djl_motion_time(&d->plan), (long long)info->origin);
+    if (info->clipped)
+        model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
+                  "t = %.17g s: %s: the jerk time of the stage that ends the current one was "
+                  "changed so that the velocity settles within v_max = %g m/s", t, why,
+                  d->p.v_max);
+}
+
+/* The plan replaced by djl_replan at u (samples of the current plan), towards g. */
+static model_status replan_at(model_instance *m, double t, double u, const djl_goal *g,
+                              const char *why)
+{
+    model_data *d = &m->d;
+    djl_replan_info info;
+    djl_error err;
+    djl_status st = djl_replan(&d->plan, u, g, &d->plan, &m->scratch, &info, &err);
+    if (st != DJL_OK)
+        return model_refuse(m, "DoStep at t = %.17g s: %s: %s: %s (nothing was done)", t, why,
+                            djl_status_name(st), err.message);
+    replanned(m, t, g, &info, why);
+    return ST_OK;
+}
+
+/* The commands read at a DoStep (t, plan time u0, the step covering du samples):
+ * edges of stop and execute, then with jerk_source = 2 the jerk times of the
+ * stages that start within the step from f_mode. */
+static model_status commands(model_instance *m, double t, double u0, double du)
+{
+    model_data *d = &m->d;
+    int stop_edge = d->stop && !d->stop_seen, exec_edge = d->execute && !d->execute_seen;
+    double u_end = u0 + du, from, at;
+    djl_goal g;
+    int i, it, now;
+    memset(&g, 0, sizeof g);
+    if (d->jerk_source == 2) {
+        int32_t Nf = jerk_samples(d->f_mode, d->p.Te);
+        if (Nf == 0)
+            return model_refuse(m, "DoStep at t = %.17g s: invalid input f_mode = %g Hz: with "
+                                "jerk_source = 2 its period must be between Te/2 and %d samples "
+                                "of Te = %g s (nothing was done)", t, d->f_mode,
+                                DJL_MAX_FILTER_SAMPLES, d->p.Te);
+        for (i = 0; i < 4; i++) g.N[i] = Nf;
+    } else {
+        memcpy(g.N, d->first.N, sizeof g.N);
+    }
+    if (stop_edge || exec_edge) {
+        model_status st;
+        g.kind = stop_edge ? DJL_GOAL_STOP : DJL_GOAL_TARGET;
+        g.target = d->target;
+        st = replan_at(m, t, u0, &g, stop_edge ? "stop" : "execute");
+        if (st != ST_OK) return st;
+        d->goal = g.kind;
+        d->goal_target = d->target;
+        u0 -= djl_floor(u0);
+        u_end = u0 + du;
+    }
+    d->stop_seen = d->stop;
+    d->execute_seen = d->execute;
+    if (d->jerk_source != 2) return ST_OK;
+    /* jerk times from f_mode: a stage that starts within the step with another jerk
+     * time is replanned as it starts; while cruising or speeding up, the stages to
+     * come are replanned at once (a stop or the landing then falls on the right
+     * sample).  Each replan is at a later sample than the one before: at most a
+     * few per step. */
+    g.kind = d->goal == DJL_GOAL_STOP ? DJL_GOAL_STOP : DJL_GOAL_TARGET;
+    g.target = d->goal == 0 ? d->p.x0 + d->p.distance : d->goal_target;
+    g.no_stop_first = 1;
+    g.keep_speed = 1;
+    from = u0;
+    now = u0 >= 0.0;
+    for (it = 0; it < 8; it++) {
+        djl_replan_info info;
+        djl_error err;
+        djl_status st;
+        double o;
+        if (!djl_jerk_times_due(&d->plan, from, u_end, g.N, now, &at)) break;
+        st = djl_replan(&d->plan, at, &g, &d->plan, &m->scratch, &info, &err);
+        if (st == DJL_E_INFEASIBLE) {
+            /* the jerk time of f_mode no longer lands from here without stopping and
+             * coming back: the stage keeps the one it was planned with */
+            model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
+                      "t = %.17g s: f_mode = %g Hz: the stage starting at sample %.17g keeps "
+                      "its planned jerk time (%s)", t, d->f_mode, at, err.message);
+            from = djl_floor(at) + 1.0; /* past the stage that keeps its jerk time */
+            now = 0;
+            continue;
+        }
+        if (st != DJL_OK)
+            return model_refuse(m, "DoStep at t = %.17g s: f_mode: %s: %s (nothing was done)", t,
+                                djl_status_name(st), err.message);
+        replanned(m, t, &g, &info, "f_mode");
+        o = djl_floor(at);
+        u0 -= o;
+        u_end -= o;
+        from = 1.0; /* from b = origin + 1 on, the steps the replan placed are right */
+        now = 0;
+    }
+    return ST_OK;
 }
 
 model_status model_do_step(model_instance *m, double t, double h)
@@ -542,6 +748,11 @@ model_status model_do_step(model_instance *m, double t, double h)
     if (!(whole + (double)d->n + phase <= (double)DJL_MAX_MOTION_SAMPLES))
         return model_fail(m, "DoStep: communication step %g s takes the FMU past %g samples of "
                           "Te = %g s", h, (double)DJL_MAX_MOTION_SAMPLES, d->p.Te);
+    if (d->execute != d->execute_seen || d->stop != d->stop_seen || d->jerk_source == 2) {
+        model_status st = commands(m, t, (double)d->n - d->offset + d->phase,
+                                   whole + phase - d->phase);
+        if (st != ST_OK) return st;
+    }
     n = d->n + (int64_t)whole;
     d->n = n;
     d->phase = phase;
@@ -595,6 +806,17 @@ static int same_params(const djl_params *a, const djl_params *b)
            memcmp(a->seg_v_end, b->seg_v_end, sizeof a->seg_v_end) == 0;
 }
 
+/* The same outputs, bit for bit (field by field: the struct has padding). */
+static int same_sample(const djl_sample *a, const djl_sample *b)
+{
+    return memcmp(&a->x, &b->x, sizeof a->x) == 0 && memcmp(&a->v, &b->v, sizeof a->v) == 0 &&
+           memcmp(&a->a, &b->a, sizeof a->a) == 0 && memcmp(&a->j, &b->j, sizeof a->j) == 0 &&
+           memcmp(&a->x_al, &b->x_al, sizeof a->x_al) == 0 &&
+           memcmp(&a->v_al, &b->v_al, sizeof a->v_al) == 0 &&
+           memcmp(&a->a_al, &b->a_al, sizeof a->a_al) == 0 && a->done == b->done &&
+           a->segment == b->segment && a->stage == b->stage;
+}
+
 /* Structure of a state (header already checked): NULL if sound, else why not. */
 static const char *state_flaw(const model_data *d, char *why, size_t nwhy)
 {
@@ -614,9 +836,49 @@ static const char *state_flaw(const model_data *d, char *why, size_t nwhy)
     if (!djl_isfinite(d->t_now)) return "the communication time is not finite";
     if ((d->state & (MS_STEP | MS_TERMINATED)) && !d->planned)
         return "a state after initialization without a plan";
+    if (d->jerk_source != 1 && d->jerk_source != 2) return "jerk_source is neither 1 nor 2";
+    if ((d->execute | d->stop | d->execute_seen | d->stop_seen) & ~1)
+        return "a Boolean input is neither 0 nor 1";
+    if (!(djl_isfinite(d->target) && djl_fabs(d->target) <= DJL_MAX_POSITION))
+        return "the input target is out of range";
+    if (!(djl_isfinite(d->f_mode) && d->f_mode > 0.0)) return "the input f_mode is not > 0";
     if (!d->planned) return NULL; /* the plan is rebuilt before any use */
     if (djl_validate(&d->p, NULL) != DJL_OK) return "its parameters are invalid";
-    if (!same_params(&d->p, &pl->p)) return "its plan was not made from its parameters";
+    if (d->goal != 0 && d->goal != DJL_GOAL_TARGET && d->goal != DJL_GOAL_STOP)
+        return "the goal of the move is unknown";
+    if (!(djl_isfinite(d->goal_target) && djl_fabs(d->goal_target) <= DJL_MAX_POSITION))
+        return "the target of the move is out of range";
+    if (d->replans < 0) return "the replan count is negative";
+    if (d->first.k_end < 0 || d->first.k_end > DJL_MAX_MOTION_SAMPLES ||
+        !djl_isfinite(d->first.v_reached) || !djl_isfinite(d->first.a_reached) ||
+        !djl_isfinite(d->first.d_reached))
+        return "the figures of the parametric move are out of range";
+    for (i = 0; i < 4; i++)
+        if (d->first.N[i] < 0 || d->first.N[i] > DJL_MAX_FILTER_SAMPLES)
+            return "a jerk time of the parametric move is out of range";
+    if (pl->replanned != 0 && pl->replanned != 1) return "the replanned flag is neither 0 nor 1";
+    if (!pl->replanned && d->jerk_source == 1 && !same_params(&d->p, &pl->p))
+        return "its plan was not made from its parameters";
+    if (pl->replanned || d->jerk_source == 2) {
+        /* a plan of its own (a replan, or jerk times from f_mode): sound values */
+        double v[7];
+        v[0] = pl->p.Te; v[1] = pl->p.x0; v[2] = pl->p.v0; v[3] = pl->p.v_max;
+        v[4] = pl->p.a_max; v[5] = pl->p.d_max; v[6] = pl->p.distance;
+        if (!finite_all(v, 7) || pl->p.Te != d->p.Te || pl->p.v_max != d->p.v_max ||
+            pl->p.a_max != d->p.a_max || pl->p.d_max != d->p.d_max ||
+            djl_fabs(pl->p.x0) > DJL_MAX_POSITION || djl_fabs(pl->p.v0) > pl->p.v_max)
+            return "its plan's parameters are not those of the FMU";
+    }
+    if (pl->n_steps < 0 || pl->n_steps > DJL_MAX_PLAN_STEPS)
+        return "the plan's step count is out of range";
+    if (!djl_isfinite(pl->level0)) return "the plan's acceleration level is not finite";
+    for (i = 0; i < pl->n_steps; i++) {
+        const djl_step *st = &pl->step[i];
+        if (st->tau < -DJL_MAX_MOTION_SAMPLES || st->tau > DJL_MAX_MOTION_SAMPLES ||
+            !djl_isfinite(st->A) || st->N < 0 || st->N > DJL_MAX_FILTER_SAMPLES ||
+            st->stage < 0 || st->stage > 4)
+            return "a step of the plan is out of range";
+    }
     if (!djl_isfinite(d->t_start)) return "t_start is not finite";
     if (!djl_isfinite(d->offset) || djl_fabs(d->offset) > 1e15 || d->offset != djl_floor(d->offset))
         return "the start offset is not a whole number of samples in range";
@@ -641,12 +903,13 @@ static const char *state_flaw(const model_data *d, char *why, size_t nwhy)
         if (pc->k < 0 || pc->k > DJL_MAX_MOTION_SAMPLES || (i > 0 && pc->k < pl->piece[i - 1].k))
             return "the plan's pieces are not in order";
         if (pc->seg < 0 || pc->seg > pl->n_segments) return "a piece's segment is out of range";
+        if (pc->stage < 0 || pc->stage > 4) return "a piece's stage is out of range";
         if (!finite_all(v, 7)) return "a piece of the plan is not finite";
     }
     /* the outputs are those of the plan at the current sample */
     cur = d->cursor;
     djl_eval(pl, (double)d->n - d->offset + d->phase, &cur, &o);
-    if (cur != d->cursor || memcmp(&o, &d->out, sizeof o) != 0)
+    if (cur != d->cursor || !same_sample(&o, &d->out))
         return "its outputs are not those of its plan at its time";
     return NULL;
 }

@@ -33,7 +33,16 @@ typedef enum {
 typedef enum { ST_OK = 0, ST_WARNING = 1, ST_DISCARD = 2, ST_ERROR = 3, ST_FATAL = 4 } model_status;
 
 #define MODEL_MAGIC 0x4a4c4446u /* "FDLJ" */
-#define MODEL_LAYOUT 3u
+#define MODEL_LAYOUT 4u
+
+/* The figures of the parametric move planned at initialisation (the calculated
+ * parameters motion_time, N_F1..N_F4, v_reached, a_reached, d_reached): commands
+ * replace the plan, not them. */
+typedef struct {
+    int64_t k_end;
+    int32_t N[4];
+    double v_reached, a_reached, d_reached;
+} plan_summary;
 
 typedef struct {
     uint32_t magic;
@@ -53,6 +62,16 @@ typedef struct {
     int32_t cursor;
     djl_plan plan;
     djl_sample out;         /* outputs at the current time */
+    /* commanded generator (docs/generator.md, "Commanded moves") */
+    int32_t jerk_source;    /* parameter: 1 jerk times T_F1..T_F4, 2 from the input f_mode */
+    int32_t execute, stop;  /* Boolean inputs, 0 or 1 */
+    int32_t execute_seen, stop_seen; /* their values at the previous DoStep (edges) */
+    int32_t goal;           /* 0 the parametric move; DJL_GOAL_TARGET; DJL_GOAL_STOP */
+    double target;          /* m, input */
+    double f_mode;          /* Hz, input */
+    double goal_target;     /* m, target of the commanded move in progress */
+    int64_t replans;        /* replans made (logs) */
+    plan_summary first;
 } model_data;
 
 typedef void (*model_logger)(void *env, model_status status, const char *category,
@@ -70,6 +89,8 @@ typedef struct {
     /* the last whole-sample step size seen by DoStep and its count of samples (a cache:
      * derived from h and Te alone, so not part of an FMU state) */
     double step_h, step_Te, step_whole;
+    /* work space of a replan (its new motion): not part of an FMU state */
+    djl_plan scratch;
 } model_instance;
 
 /* Initialise an instance (default parameters, state Instantiated). */

@@ -13,7 +13,7 @@ import sys
 
 from . import __version__
 
-COMMANDS = ("build", "demo", "simulate", "map", "tune", "report", "compare")
+COMMANDS = ("build", "demo", "simulate", "map", "tune", "online", "report", "compare")
 
 EPILOG = """\
 typical use:
@@ -31,6 +31,9 @@ typical use:
   djl-fmu tune X --single
       tuned JL/DJL jerk times (DJL robust by default; a [map] grid: one row per move), as a
       CSV the FMU or a controller loads, in ./djl-fmu-out/tune (docs/tune.md)
+  djl-fmu online X
+      DJL whose jerk times the FMU takes online from f_mode (the mode map at the current Z
+      position, issue #12), against the offline-tuned DJL; in ./djl-fmu-out/online
   djl-fmu build --fmi-version 3 -o out/JerkLimitedTrajectory.fmu
       write an FMI 3.0 co-simulation FMU (binary for this platform + C sources)
   djl-fmu report

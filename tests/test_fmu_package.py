@@ -75,7 +75,8 @@ def test_model_description_declares_capabilities(fmus, version):
     items = {t.name: [(i.name, int(i.value)) for i in t.items]
              for t in md.typeDefinitions if t.type == "Enumeration"}
     assert items == {"Profile": [("AL", 1), ("JL", 2), ("DJL", 3)],
-                     "ShortStage": [("stretch", 1), ("overlap", 2)]}
+                     "ShortStage": [("stretch", 1), ("overlap", 2)],
+                     "JerkSource": [("parameters", 1), ("f_mode", 2)]}
     assert by["profile"].declaredType.name == "Profile"
     display = {u.name: {d.name: d.factor for d in u.displayUnits} for u in md.unitDefinitions}
     quantity = {"m": ("Position", "mm"), "m/s": ("Velocity", "mm/s"),
@@ -83,6 +84,9 @@ def test_model_description_declares_capabilities(fmus, version):
                 "s": ("Time", "ms")}
     for v in md.modelVariables:
         if v.type in ("Real", "Float64") and v.causality != "independent":
+            if v.unit == "Hz":  # f_mode: a frequency, displayed in Hz
+                assert v.declaredType.quantity == "Frequency", v.name
+                continue
             q, disp = quantity[v.unit]
             assert v.declaredType is not None and v.declaredType.quantity == q, v.name
             assert v.declaredType.displayUnit == disp, v.name
@@ -100,11 +104,18 @@ def test_model_description_declares_capabilities(fmus, version):
             for x in str(v.start).split():
                 assert v.min is None or float(v.min) <= float(x), v.name
                 assert v.max is None or float(x) <= float(v.max), v.name
-    # ModelStructure: every output, no dependency (no inputs, no states)
+    # issue #12: the inputs, with their declared start values
+    inputs = {v.name: v for v in md.modelVariables if v.causality == "input"}
+    assert set(inputs) == {"target", "execute", "stop", "f_mode"}
+    assert inputs["execute"].type == inputs["stop"].type == "Boolean"
+    assert inputs["target"].unit == "m" and inputs["f_mode"].unit == "Hz"
+    assert by["jerk_source"].declaredType.name == "JerkSource"
+    assert by["busy"].type == "Boolean" and by["stage"].causality == "output"
+    # ModelStructure: every output, depending on the inputs (no states)
     outs = md.outputs
     assert {u.variable.name for u in outs} == {v.name for v in md.modelVariables
                                                if v.causality == "output"}
-    assert all(u.dependencies == [] for u in outs)
+    assert all({d.name for d in u.dependencies} == set(inputs) for u in outs)
     assert {u.variable.name for u in md.initialUnknowns} >= {"motion_time", "N_F1", "x"}
 
 

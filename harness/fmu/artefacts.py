@@ -292,8 +292,8 @@ def documentation_html(fmi_version: int, plot_name: str) -> str:
             hi = "" if v.max is None else "≤ " + str(v.max)
             rng = ", ".join(s for s in (lo, hi) if s)
         unit = v.unit or "-"
-        if v.quantity:
-            unit += f" ({spec.DISPLAY_UNITS[v.unit or ''][0]})"
+        if v.quantity and v.unit in spec.DISPLAY_UNITS:
+            unit += f" ({spec.DISPLAY_UNITS[v.unit][0]})"
         rows.append(f"<tr><td><code>{cell(name)}</code></td><td>{cell(v.causality)}</td>"
                     f"<td>{cell(v.type)}</td><td>{cell(unit)}</td><td>{cell(v.start)}</td>"
                     f"<td>{cell(rng)}</td><td>{cell(v.description)}</td></tr>")

@@ -20,7 +20,7 @@ from .spec import VARIABLES, Variable
 
 # the generator core (map in docs/generator.md): parameter checks, one segment (stages
 # sized, landing solved), a motion of segments, evaluation of samples
-CORE_SOURCES = ("djl_validate.c", "djl_segment.c", "djl_motion.c", "djl_eval.c")
+CORE_SOURCES = ("djl_validate.c", "djl_segment.c", "djl_motion.c", "djl_replan.c", "djl_eval.c")
 SOURCES_COMMON = CORE_SOURCES + ("fmu_model.c",)
 SOURCES = {2: SOURCES_COMMON + ("fmi2.c",), 3: SOURCES_COMMON + ("fmi3.c",)}
 HEADERS = ("djl_core.h", "djl_internal.h", "djl_math.h", "djl_vars.h", "fmu_model.h")
@@ -100,7 +100,8 @@ def c_header() -> str:
         "    unsigned int vr;",
         "    char type;      /* 'R' Real/Float64, 'I' Integer/Int32, 'B' Boolean,",
         "                       'E' Enumeration (stored as an integer; FMI 3: Int64) */",
-        "    char causality; /* 'p' parameter, 'c' calculatedParameter, 'o' output, 't' time */",
+        "    char causality; /* 'p' parameter, 'c' calculatedParameter, 'i' input, 'o' output,",
+        "                       't' time */",
         "    unsigned short size;",
         "    const char *name;",
         "} djl_var_info;",
@@ -108,7 +109,8 @@ def c_header() -> str:
         "static const djl_var_info djl_var_table[] = {",
     ]
     ctype = {"Real": "R", "Integer": "I", "Boolean": "B", "Enumeration": "E"}
-    ccaus = {"parameter": "p", "calculatedParameter": "c", "output": "o", "independent": "t"}
+    ccaus = {"parameter": "p", "calculatedParameter": "c", "input": "i", "output": "o",
+             "independent": "t"}
     for v in VARIABLES:
         lines.append(
             f"    {{{v.vr}u, '{ctype[v.type]}', '{ccaus[v.causality]}', {v.size}, \"{v.name}\"}},"
@@ -171,7 +173,7 @@ def fmi2_model_description() -> str:
     x.append("  <TypeDefinitions>")
     for q, unit in spec.QUANTITIES.items():
         x.append(f"    <SimpleType{_attrs(name=q)}>")
-        disp = spec.DISPLAY_UNITS[unit][0]
+        disp = spec.DISPLAY_UNITS.get(unit, (None, 1.0))[0]
         x.append(f"      <Real{_attrs(quantity=q, unit=unit, displayUnit=disp)}/>")
         x.append("    </SimpleType>")
     for name, items in spec.ENUMERATIONS.items():
@@ -221,10 +223,12 @@ def fmi2_model_description() -> str:
     x.append("  </ModelVariables>")
     x.append("  <ModelStructure>")
     x.append("    <Outputs>")
-    # no inputs, no states: every output depends on parameters and time only
+    # no states; an output depends on the inputs (a command acts from the first sample at or
+    # after the communication point: docs/generator.md, "Commanded moves")
+    deps2 = " ".join(str(index[name]) for name, _, v in entries if v.causality == "input")
     for name, _, v in entries:
         if v.causality == "output":
-            x.append(f"      <Unknown{_attrs(index=index[name], dependencies='')}/>")
+            x.append(f"      <Unknown{_attrs(index=index[name], dependencies=deps2)}/>")
     x.append("    </Outputs>")
     x.append("    <InitialUnknowns>")
     for name, _, v in entries:
@@ -277,7 +281,7 @@ def fmi3_model_description() -> str:
     x.append("  <TypeDefinitions>")
     for q, unit in spec.QUANTITIES.items():
         x.append(f"    <Float64Type{_attrs(name=q, quantity=q, unit=unit)}"
-                 f"{_attrs(displayUnit=spec.DISPLAY_UNITS[unit][0])}/>")
+                 f"{_attrs(displayUnit=spec.DISPLAY_UNITS.get(unit, (None, 1.0))[0])}/>")
     for name, items in spec.ENUMERATIONS.items():
         x.append(f"    <EnumerationType{_attrs(name=name)}>")
         for item, value, desc in items:
@@ -307,7 +311,7 @@ def fmi3_model_description() -> str:
             attrs["declaredType"] = v.quantity
         if v.declared_type:
             attrs["declaredType"] = v.declared_type
-        if v.causality not in ("parameter", "independent"):
+        if v.causality not in ("parameter", "independent", "input"):
             attrs["initial"] = v.initial
         if v.type == "Real" and v.unit:
             attrs["unit"] = v.unit
@@ -322,10 +326,11 @@ def fmi3_model_description() -> str:
             x.append(f"    <{typ}{_attrs(**attrs)}/>")
     x.append("  </ModelVariables>")
     x.append("  <ModelStructure>")
-    # no inputs, no states: every output depends on parameters and time only
+    # no states; an output depends on the inputs (as in FMI 2)
+    deps3 = " ".join(str(v.vr) for v in VARIABLES if v.causality == "input")
     for v in VARIABLES:
         if v.causality == "output":
-            x.append(f"    <Output{_attrs(valueReference=v.vr, dependencies='')}/>")
+            x.append(f"    <Output{_attrs(valueReference=v.vr, dependencies=deps3)}/>")
     for v in VARIABLES:
         if (v.causality == "output" and v.initial in ("approx", "calculated")) or (
             v.causality == "calculatedParameter"
@@ -366,8 +371,8 @@ def readme_table() -> str:
         name = f"`{v.name}`" + (f"[1..{v.size}]" if v.size > 1 else "")
         start = "" if v.start is None else _fmt(v.start, v.type)
         unit = v.unit or "–"
-        if v.quantity:
-            unit += f" ({spec.DISPLAY_UNITS[v.unit or ''][0]})"
+        if v.quantity and v.unit in spec.DISPLAY_UNITS:
+            unit += f" ({spec.DISPLAY_UNITS[v.unit][0]})"
         lo = "" if v.min is None else f"{_fmt(v.min, v.type).replace('.0', '')}"
         hi = "" if v.max is None else f"{_fmt(v.max, v.type).replace('.0', '')}"
         rng = f"[{lo}, {hi}]" if lo and hi else f"≥ {lo}" if lo else f"≤ {hi}" if hi else ""

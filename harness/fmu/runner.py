@@ -45,15 +45,21 @@ class FMUError(RuntimeError):
         Its FMI status (3 = error, 4 = fatal).
     log : list of LogRecord
         What the FMU logged up to the failure (the last error explains it).
+    variable : str or None
+        The variable being set when the call failed (:meth:`GeneratorFMU.set_inputs`),
+        named in the message with its value; None otherwise.
     """
 
-    def __init__(self, function: str, status: int, log: list[LogRecord]) -> None:
+    def __init__(self, function: str, status: int, log: list[LogRecord], *,
+                 variable: str | None = None, value: Any = None) -> None:
         self.function = function
         self.status = status
         self.log = list(log)
+        self.variable = variable
         errors = [r.message for r in log if r.status >= 3]
         detail = errors[-1] if errors else "no message logged"
-        super().__init__(f"{function} failed with status {status}: {detail}")
+        what = f" setting {variable} = {value!r}" if variable is not None else ""
+        super().__init__(f"{function} failed with status {status}{what}: {detail}")
 
 
 @dataclass
@@ -354,6 +360,67 @@ class GeneratorFMU:
                 fn = {"Real": self.fmu.setReal, "Integer": self.fmu.setInteger,
                       "Boolean": self.fmu.setBoolean}[kind]
             self._call(fn, vrs, vals)
+
+    def set_inputs(self, *, target: float | None = None, execute: bool | None = None,
+                   stop: bool | None = None, f_mode: float | None = None) -> None:
+        """Set the commanded inputs (issue #12); the next :meth:`do_step` reads them.
+
+        Only the inputs given are set; the others keep their values.  The FMU
+        reads them at its next ``doStep``: a rising edge of ``execute`` (against
+        the value seen at the previous ``doStep``) moves from the current state
+        to ``target``, ending at rest; a rising edge of ``stop`` brings the axis
+        to rest (stop wins over execute at the same step); ``f_mode`` (Hz) gives
+        the jerk time of each constant-jerk stage when ``jerk_source = 2``.  A
+        command takes effect at the first generator sample at or after the
+        current time.  Setting ``execute=True`` twice without a ``False`` in
+        between is no new edge: send ``execute=False`` at a later step first.
+
+        Parameters
+        ----------
+        target : float, optional
+            Absolute target position of the next ``execute`` (m).
+        execute : bool, optional
+            Move to ``target`` on a rising edge.
+        stop : bool, optional
+            Come to rest on a rising edge.
+        f_mode : float, optional
+            Mode frequency (Hz), used when ``jerk_source = 2``.
+
+        Raises
+        ------
+        TypeError
+            A Boolean input given anything but a bool (``1`` is refused), a Real
+            input given a bool or a non-number; nothing is set then.
+        KeyError
+            The FMU has no such input (an FMU without the commanded interface).
+        FMUError
+            The FMU refused a value (NaN or infinite ``target`` or ``f_mode``,
+            |target| > 1e300, ``f_mode`` <= 0): the message names the input and
+            the value, the FMU keeps its previous value and stays usable.  The
+            inputs are set in the order target, f_mode, stop, execute; those
+            before the refused one are set.
+        """
+        given = [(name, kind, value) for name, kind, value in (
+            ("target", "Real", target), ("f_mode", "Real", f_mode),
+            ("stop", "Boolean", stop), ("execute", "Boolean", execute)) if value is not None]
+        todo = []
+        for name, kind, value in given:  # check every value before setting any
+            var = self.variable(name)
+            if var.causality != "input":
+                raise KeyError(f"{self.path.name}: {name!r} is not an input of this FMU")
+            todo.append((name, kind, var.valueReference, _convert(name, kind, value), value))
+        from fmpy.fmi1 import FMICallException
+
+        for name, kind, vr, converted, value in todo:
+            if kind == "Real":
+                fn = self.fmu.setFloat64 if self.fmi_version == 3 else self.fmu.setReal
+            else:
+                fn = self.fmu.setBoolean
+            try:
+                fn([vr], [converted])
+            except FMICallException as e:
+                raise FMUError(str(getattr(e, "function", fn.__name__)), int(e.status),
+                               self.log, variable=name, value=value) from None
 
     def get(self, name: str) -> Any:
         """Value of one variable (arrays come back as numpy arrays)."""

@@ -33,7 +33,8 @@ LOG_CATEGORIES: tuple[tuple[str, str], ...] = (
     ("logStatusError", "Errors: invalid parameters, infeasible motions, calls out of order"),
 )
 
-Causality = Literal["parameter", "calculatedParameter", "output", "local", "independent"]
+Causality = Literal["parameter", "calculatedParameter", "input", "output", "local",
+                    "independent"]
 Variability = Literal["fixed", "tunable", "discrete", "continuous"]
 VarType = Literal["Real", "Integer", "Boolean", "Enumeration"]
 
@@ -43,6 +44,7 @@ UNITS: dict[str, dict[str, int]] = {
     "m/s": {"m": 1, "s": -1},
     "m/s2": {"m": 1, "s": -2},
     "m/s3": {"m": 1, "s": -3},
+    "Hz": {"s": -1},
 }
 
 DISPLAY_UNITS: dict[str, tuple[str, float]] = {
@@ -53,7 +55,7 @@ DISPLAY_UNITS: dict[str, tuple[str, float]] = {
     "m/s3": ("mm/s3", 1000.0),
 }
 """Display unit of each unit (a machine-tool user thinks in mm): name and factor
-(display value = factor x value)."""
+(display value = factor x value).  A unit without one (Hz) is displayed as it is."""
 
 QUANTITIES: dict[str, str] = {
     "Time": "s",
@@ -61,6 +63,7 @@ QUANTITIES: dict[str, str] = {
     "Velocity": "m/s",
     "Acceleration": "m/s2",
     "Jerk": "m/s3",
+    "Frequency": "Hz",
 }
 """Declared Real types: name (also its ``quantity``) and unit; every Real variable with a
 unit gets the type of its unit (but the independent variable ``time``)."""
@@ -77,6 +80,11 @@ ENUMERATIONS: dict[str, tuple[tuple[str, int, str], ...]] = {
         ("stretch", 1, "lengthen a short stage so that every constant-jerk stage lasts its "
                        "jerk time"),
         ("overlap", 2, "let the two ramps of a short stage overlap, as in the paper"),
+    ),
+    "JerkSource": (
+        ("parameters", 1, "the jerk times T_F1..T_F4 (JL: T_F1)"),
+        ("f_mode", 2, "each stage's jerk time is the period 1/f_mode read when the stage "
+                      "starts (the paper's rule, applied online)"),
     ),
 }
 """Enumeration types: items (name, value, description).  FMI 2 sets them with
@@ -147,6 +155,14 @@ def _o(name, vr, typ, desc, unit=None, c_name="", variability="discrete", min=No
                     min, max)
 
 
+def _i(name, vr, typ, start, desc, unit=None, variability="discrete", min=None, max=None,
+       positive=False):
+    if positive:
+        min = 0.0
+    return Variable(name, vr, typ, "input", variability, desc, unit, start, None, 1, "", min, max,
+                    positive)
+
+
 def _c(name, vr, typ, desc, unit=None, min=None, max=None):
     return Variable(name, vr, typ, "calculatedParameter", "fixed", desc, unit, None, "calculated",
                     1, "", min, max)
@@ -206,6 +222,24 @@ VARIABLES: tuple[Variable, ...] = (
        "over the sample interval that contains now", "m/s2"),
     _o("segment", 33, "Integer", "1-based segment of the AL profile now; 0 before t_start",
        min=0, max=MAX_SEGMENTS),
+    # --- commanded generator (issue #12) ----------------------------------------
+    _o("busy", 34, "Boolean", "True while a move is planned and not finished (not done)"),
+    _o("stage", 35, "Integer", "Constant-jerk stage in progress: 1 start of acceleration, 2 end "
+       "of acceleration, 3 start of deceleration, 4 end of deceleration; 0 when none",
+       min=0, max=4),
+    _p("jerk_source", 24, "Enumeration", 1, "Jerk times: 1 = the parameters T_F1..T_F4; 2 = "
+       "from the input f_mode, each constant-jerk stage's jerk time being round(1/(f_mode Te)) "
+       "samples read when the stage starts (JL or DJL, n_segments = 0, v_e = 0)", min=1, max=2,
+       declared_type="JerkSource"),
+    _i("target", 50, "Real", 0.0, "Target position of the next execute command (absolute)", "m",
+       min=-MAX_POSITION, max=MAX_POSITION),
+    _i("execute", 51, "Boolean", False, "Rising edge: move from the current state (any velocity "
+       "and acceleration) to target, ending at rest; a move in progress is replaced"),
+    _i("stop", 52, "Boolean", False, "Rising edge: come to rest with d_max and the stages' jerk "
+       "times (wins over execute at the same step); the axis then waits for execute"),
+    _i("f_mode", 53, "Real", 10.0, "Frequency of the vibration mode, used when jerk_source = 2 "
+       "(its period is the jerk time of the stages that start)", "Hz", variability="continuous",
+       positive=True),
     _c("motion_time", 40, "Real", "Duration of the motion, filters included (ends at "
        "t_start + motion_time)", "s"),
     _c("N_F1", 41, "Integer", "Jerk time of stage 1 in samples, round(T_F1/Te) (0 for AL)",
@@ -229,6 +263,7 @@ VARIABLES: tuple[Variable, ...] = (
 )
 
 PARAMETERS = tuple(v for v in VARIABLES if v.causality == "parameter")
+INPUTS = tuple(v for v in VARIABLES if v.causality == "input")
 OUTPUTS = tuple(v for v in VARIABLES if v.causality == "output")
 CALCULATED = tuple(v for v in VARIABLES if v.causality == "calculatedParameter")
 BY_NAME = {v.name: v for v in VARIABLES}

@@ -16,10 +16,13 @@
 #define djl_eval libm_djl_eval
 #define djl_applied_jerk_time libm_djl_applied_jerk_time
 #define djl_motion_time libm_djl_motion_time
+#define djl_replan libm_djl_replan
+#define djl_jerk_times_due libm_djl_jerk_times_due
 
 #define DJL_INTERNAL static
 
 #include "djl_validate.c"
 #include "djl_segment.c"
 #include "djl_motion.c"
+#include "djl_replan.c"
 #include "djl_eval.c"

@@ -534,6 +534,103 @@ static void run_forged_states(void)
     fmi2FreeInstance(c);
 }
 
+/* Commanded moves (issue #12): inputs in Step Mode, f_mode changing at every step
+ * with jerk_source = 2, an execute, a stop, another execute, bad inputs refused
+ * naming them (the instance goes on), FMU state in the middle of a commanded move
+ * replays bit for bit, and the move ends exactly on its target at rest. */
+static void set_bool(fmi2Component c, fmi2ValueReference vr, int v)
+{
+    fmi2Boolean b = v ? fmi2True : fmi2False;
+    CHECK(fmi2SetBoolean(c, &vr, 1, &b) == fmi2OK, "set boolean %u", vr);
+}
+
+static int get_int(fmi2Component c, fmi2ValueReference vr)
+{
+    fmi2Integer v = -1;
+    CHECK(fmi2GetInteger(c, &vr, 1, &v) == fmi2OK, "get integer %u", vr);
+    return (int)v;
+}
+
+static int get_bool(fmi2Component c, fmi2ValueReference vr)
+{
+    fmi2Boolean v = fmi2False;
+    CHECK(fmi2GetBoolean(c, &vr, 1, &v) == fmi2OK, "get boolean %u", vr);
+    return v == fmi2True;
+}
+
+static void run_commands(void)
+{
+    fmi2Component c = make("commands");
+    fmi2ValueReference vjs = VR_JERK_SOURCE, vp = VR_PROFILE, vt = VR_TARGET, vf = VR_F_MODE;
+    fmi2Integer two = 2, three = 3, one = 1;
+    fmi2FMUstate s = NULL;
+    double t = 0.0, x1[300], x2[300], t_saved = 0.0, bad;
+    int k, stages = 0;
+    CHECK(fmi2SetInteger(c, &vjs, 1, &two) == fmi2OK, "jerk_source");
+    set_real(c, VR_DISTANCE, 0.3);
+    set_real(c, VR_V_MAX, 0.5);
+    CHECK(fmi2EnterInitializationMode(c) == fmi2OK, "enter");
+    CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit: %s", last_message);
+    for (k = 0; k < 2500; k++, t += 1e-3) {
+        double f = 9.0 + 3.0 * sin(k / 40.0), v;
+        set_real(c, VR_F_MODE, f);
+        if (k == 200 || k == 520) {
+            set_real(c, VR_TARGET, k == 200 ? 0.12 : -0.2);
+            set_bool(c, VR_EXECUTE, 1);
+        }
+        if (k == 201 || k == 521) set_bool(c, VR_EXECUTE, 0);
+        if (k == 380) set_bool(c, VR_STOP, 1);
+        if (k == 381) set_bool(c, VR_STOP, 0);
+        if (k == 600) {
+            /* bad values: refused naming the input, nothing changed */
+            bad = NAN;
+            expect_error(fmi2SetReal(c, &vt, 1, &bad), "target");
+            bad = -1.0;
+            expect_error(fmi2SetReal(c, &vf, 1, &bad), "f_mode");
+            bad = 1e6; /* a period of 1 us: below Te/2 */
+            expect_error(fmi2SetReal(c, &vf, 1, &bad), "f_mode");
+            CHECK(get_real(c, VR_TARGET) == -0.2 && get_real(c, VR_F_MODE) == f,
+                  "the previous values are kept");
+        }
+        if (k == 700) {
+            CHECK(fmi2GetFMUstate(c, &s) == fmi2OK && s, "get state");
+            t_saved = t;
+        }
+        CHECK(fmi2DoStep(c, t, 1e-3, fmi2True) == fmi2OK, "step %d: %s", k, last_message);
+        v = get_real(c, VR_V);
+        CHECK(isfinite(get_real(c, VR_X)) && fabs(v) <= 0.5 * (1 + 1e-12), "step %d: v %g", k, v);
+        CHECK(get_bool(c, VR_BUSY) == !get_bool(c, VR_DONE), "busy is not done");
+        stages |= 1 << get_int(c, VR_STAGE);
+        if (k >= 700 && k < 1000) x1[k - 700] = get_real(c, VR_X);
+    }
+    CHECK(fabs(get_real(c, VR_X) + 0.2) <= 1e-9 * 0.5 && get_real(c, VR_V) == 0.0 &&
+              get_real(c, VR_A) == 0.0 && !get_bool(c, VR_BUSY) && get_int(c, VR_STAGE) == 0,
+          "the last move ends on -0.2 at rest: x %.17g", get_real(c, VR_X));
+    CHECK(stages == 0x1f, "every stage 0..4 seen (%x)", stages);
+    /* the state saved in the middle replays bit for bit (f_mode as it was) */
+    CHECK(fmi2SetFMUstate(c, s) == fmi2OK, "set state");
+    for (k = 700, t = t_saved; k < 1000; k++, t += 1e-3) {
+        set_real(c, VR_F_MODE, 9.0 + 3.0 * sin(k / 40.0));
+        CHECK(fmi2DoStep(c, t, 1e-3, fmi2True) == fmi2OK, "replay step");
+        x2[k - 700] = get_real(c, VR_X);
+    }
+    CHECK(memcmp(x1, x2, sizeof x1) == 0, "replay differs");
+    fmi2FreeFMUstate(c, &s);
+    fmi2FreeInstance(c);
+    /* jerk_source out of range, or 2 with AL: refused at initialisation, naming it */
+    c = make("commands-bad");
+    CHECK(fmi2SetInteger(c, &vjs, 1, &three) == fmi2OK, "jerk_source 3 is set");
+    CHECK(fmi2EnterInitializationMode(c) == fmi2OK, "enter");
+    expect_error(fmi2ExitInitializationMode(c), "jerk_source = 3");
+    fmi2FreeInstance(c);
+    c = make("commands-al");
+    CHECK(fmi2SetInteger(c, &vjs, 1, &two) == fmi2OK && fmi2SetInteger(c, &vp, 1, &one) == fmi2OK,
+          "AL");
+    CHECK(fmi2EnterInitializationMode(c) == fmi2OK, "enter");
+    expect_error(fmi2ExitInitializationMode(c), "jerk_source = 2 with profile = 1");
+    fmi2FreeInstance(c);
+}
+
 int main(int argc, char **argv)
 {
     /* argv[1]: corruptions of a serialized state (10^6 for the full campaign of
@@ -545,6 +642,7 @@ int main(int argc, char **argv)
     run_two_instances();
     run_null_pointers();
     run_forged_states();
+    run_commands();
     run_state_fuzz(n_fuzz, n_sealed);
     printf("fmi2: %d failures, %d errors logged\n", failures, errors_logged);
     return failures ? 1 : 0;

@@ -1,0 +1,171 @@
+"""``djl-fmu online``: DJL whose jerk times the FMU takes from ``f_mode`` during the move."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from ._common import interruptible
+
+if TYPE_CHECKING:
+    from ._outputs import OutputSet
+
+DESCRIPTION = """\
+Co-simulate the commanded generator FMU (issue #12) with jerk_source = 2: each
+constant-jerk stage's jerk time is round(1/(f_mode Te)) samples, f_mode read
+at the step that ends where the stage starts. The master sets f_mode at every
+communication step to the tuned mode's frequency at the Z generator's current
+position (the mode map of the scenario): the paper's DJL rule (the modal period
+at the start of each stage) applied online, inside the co-simulation, with no
+tuning beforehand. A stage whose jerk time from f_mode would no longer land the
+move without moving back keeps the one it was planned with (the FMU logs it;
+marked "kept").
+
+It runs next to the offline-tuned DJL of the same scenario (the paper's rule
+iterated on the planned move, or --offline DJL-optimal / DJL-robust) through
+the same plant and the same Z move (synchronised with the offline DJL move),
+and prints, for both: the jerk times applied per stage, the residual vibration
+(free-oscillation amplitude when the reference ends), the motion time and the
+settling time in the scenario's band; and, for the online run, where each stage
+started (the FMU's stage output), z and f_mode where its f_mode was read,
+round(1/(f_mode Te)), the samples its ramp of constant jerk lasted (the j
+output) and whether it kept its planned jerk time.
+
+SCENARIO is a single-move TOML file (format: docs/harness.md) or an embedded
+scenario name; default X. The FMU engine only (the FMU is stepped with its
+input set at every step); about 1 s a scenario.
+
+Outputs, in --out (default ./djl-fmu-out/online), written only once every run
+has succeeded:
+  <name>-online.csv   one row per run (profile, jerk times in samples, residual,
+                      motion and settling time, end position error), then one row
+                      per online stage (start, where f_mode was read, z, f_mode,
+                      N rule, N applied, kept)
+  <name>-online.png   x, v, a, j of both; the stage output and f_mode; the
+                      deflection; z(t)
+  summary.txt         the tables printed on screen
+"""
+
+EPILOG = """\
+examples:
+  djl-fmu online                       scenario X
+  djl-fmu online X Y --fmi-version 3   both Table 1 moves on the FMI 3.0 FMU
+  djl-fmu online Y --offline DJL-optimal
+                                       against DJL tuned on the model (docs/tuning.md)
+  djl-fmu online my_axis.toml --fmu my_generator.fmu
+
+Exit status: 0 on success, 2 for a bad scenario or option or an FMU without the
+commanded interface (nothing run, nothing written), 1 if a run fails or a result
+is not finite (nothing written).
+"""
+
+ONLINE_FINITE = ("residual_m", "residual_peak_m", "motion_time_s", "end_error_m")
+"""Columns of ``<name>-online.csv`` that must be finite (else exit 1, nothing written)."""
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``online`` command."""
+    p = sub.add_parser(
+        "online",
+        help="DJL with f_mode given to the FMU online from the mode map at the current Z "
+             "position, against the offline-tuned DJL (issue #12)",
+        description=DESCRIPTION,
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("scenarios", nargs="*", metavar="SCENARIO",
+                   help="single-move TOML scenario file or embedded scenario name (default: X)")
+    p.add_argument("-o", "--out", type=Path, default=Path("djl-fmu-out") / "online",
+                   metavar="DIR", help="output folder (default: ./djl-fmu-out/online)")
+    p.add_argument("--fmi-version", type=int, choices=(2, 3), default=None,
+                   help="use the package's FMI 2.0 or 3.0 FMU (default: the scenario's)")
+    p.add_argument("--fmu", type=Path, default=None, metavar="PATH",
+                   help="a generator FMU file with the commanded interface (overrides the "
+                        "scenario's)")
+    p.add_argument("--step", type=float, default=None, metavar="S",
+                   help="communication step in s, a whole multiple of Te (default: the "
+                        "scenario's; the stages are measured only when it is Te)")
+    p.add_argument("--offline", default="DJL", metavar="PROFILE",
+                   help="offline profile compared: DJL (the scenario's DJL tuning, the paper's "
+                        "rule by default), DJL-paper, DJL-optimal or DJL-robust")
+    p.add_argument("--no-plot", action="store_true", help="do not write the PNG figures")
+    p.add_argument("-q", "--quiet", action="store_true", help="do not print the tables")
+    p.set_defaults(func=interruptible(run))
+
+
+def run(args: argparse.Namespace) -> int:
+    """Check the scenarios, run them, then write the outputs; return the exit status."""
+    import math
+
+    from ..fmu.runner import FMUError
+    from ..online import COMMANDED_VARIABLES, run_online
+    from ..optimize import DJL_METHODS
+    from ._common import (
+        CommandError,
+        check_rows_finite,
+        load_scenarios,
+        report_written,
+        write_outputs,
+    )
+
+    # 1. check everything before running anything
+    scenarios, stems = load_scenarios(args.scenarios or ["X"], args.fmu, args.fmi_version,
+                                      args.out)
+    allowed = ["DJL"] + [f"DJL-{m}" for m in DJL_METHODS]
+    if args.offline not in allowed:
+        raise CommandError(2, f"--offline {args.offline!r}: choose from {', '.join(allowed)}")
+    for sc in scenarios:
+        if sc.is_sweep:
+            raise CommandError(2, f"{sc.name}: a sweep; the online co-simulation runs single "
+                                  f"moves (e.g. X, Y, or a file without [sweep])")
+        if args.step is not None:
+            r = args.step / sc.simulation.Te
+            if not (math.isfinite(r) and round(r) >= 1 and abs(r - round(r)) <= 1e-9 * r):
+                raise CommandError(2, f"--step {args.step!r}: not a whole multiple of Te = "
+                                      f"{sc.simulation.Te:g} s ({sc.name})")
+        fmu = sc.simulation.fmu
+        if fmu is not None:
+            names = fmu_variable_names(fmu)
+            lacking = [n for n in COMMANDED_VARIABLES if n not in names]
+            if lacking:
+                raise CommandError(2, f"{fmu}: not a commanded generator FMU (issue #12): no "
+                                      f"{', '.join(lacking)}")
+
+    # 2. run (nothing is written yet)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    results = []
+    for sc in scenarios:
+        try:
+            res = run_online(sc, step=args.step, offline=args.offline)
+        except (FMUError, RuntimeError, ValueError) as e:
+            raise CommandError(1, f"online co-simulation failed ({sc.name}): {e}") from None
+        check_rows_finite(res.rows()[:2], f"online co-simulation failed ({sc.name})",
+                          finite=ONLINE_FINITE, keys=("profile",))
+        results.append(res)
+    summary = "\n\n".join(r.table() for r in results)
+
+    # 3. write everything, or nothing
+    from ..results import save_figure, write_csv
+
+    def write(o: OutputSet) -> None:
+        for stem, r in zip(stems, results, strict=True):
+            write_csv(o.path(f"{stem}-online.csv"), r.rows())
+            if not args.no_plot:
+                save_figure(r.plot(), o.path(f"{stem}-online.png"))
+
+    written = write_outputs(args.out, write, summary)
+    report_written(args.out, written, summary, args.quiet)
+    return 0
+
+
+def fmu_variable_names(path: Path) -> set[str]:
+    """Names of every variable of an FMU file (``ValueError`` if it is not one)."""
+    from fmpy import read_model_description
+
+    from ..fmu.runner import check_fmu_archive
+
+    check_fmu_archive(path)
+    return {v.name for v in read_model_description(str(path)).modelVariables}

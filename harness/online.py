@@ -1,0 +1,879 @@
+"""Online f_mode: the paper's DJL rule applied by the FMU inside the co-simulation (issue #12).
+
+The offline harness tunes DJL before the move (:mod:`harness.tuning`): it plans
+the move, reads where the four constant-jerk stages start, looks up the modal
+period at the Z position there, and iterates until the jerk times reproduce
+themselves.  The commanded FMU can apply the same rule itself while it runs:
+with ``jerk_source = 2`` each constant-jerk stage's jerk time is
+round(1/(f_mode·Te)) samples, ``f_mode`` read at the ``doStep`` whose step
+contains the stage's first sample (for steps of ``Te``: the one at
+t_start − Te).  While the axis cruises, rests or speeds up at ≥ a_max/2, a
+change of ``f_mode`` replans the stages to come at once (the deceleration is
+placed for the current jerk times); a stage whose new jerk time would no
+longer land without stopping and coming back keeps the one it was planned
+with (logged by the FMU: "keeps its planned jerk time"), so the move never
+moves back.
+
+:func:`run_online` co-simulates the excited axis' FMU in that mode (profile
+DJL), the master setting ``f_mode`` at every communication point t_k to the
+tuned mode's frequency at the Z generator's current position, f(z(t_k)) from
+the mode map, and compares it, through the same plant and metrics, with the
+offline-tuned DJL of the scenario (:meth:`harness.cosim.Session.tune`, the
+paper's rule unless the scenario asks for another).  Both runs share the same
+Z move: the one synchronised with the offline DJL move (the online move's
+duration is not known before it runs).
+
+Examples
+--------
+>>> from harness.online import run_online
+>>> res = run_online("X")                    # doctest: +SKIP
+>>> print(res.table())                       # doctest: +SKIP
+>>> res.plot().savefig("online.png")         # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .cosim import CoSimResult, Session, plan_info
+from .evaluation import ProfileMetrics, profile_metrics
+from .fmu.runner import FMUError, LogRecord
+from .planner import AxisFMU
+from .plant import ScheduledMode, ScheduledPlant
+from .scenario import Scenario, load_scenario
+from .tuning import TuningResult
+
+__all__ = [
+    "COMMANDED_VARIABLES",
+    "JERK_SOURCE_F_MODE",
+    "OnlineResult",
+    "StageRecord",
+    "Ramp",
+    "jerk_ramps",
+    "cosimulate_online",
+    "kept_jerk_time_steps",
+    "run_online",
+    "stage_records",
+]
+
+JERK_SOURCE_F_MODE = 2
+"""Value of the FMU's ``jerk_source`` parameter: jerk times from the ``f_mode`` input."""
+
+COMMANDED_VARIABLES = ("jerk_source", "f_mode", "stage", "done")
+"""Variables of the commanded interface the online co-simulation needs."""
+
+ONLINE = "DJL-online"
+"""Label of the online run."""
+
+_KEPT = re.compile(r"^t = (\S+) s: f_mode = \S+ Hz: .* keeps its planned jerk time\b")
+
+
+def kept_jerk_time_steps(log: Sequence[LogRecord]) -> list[float]:
+    """Return the times of the ``doStep`` calls at which the FMU kept a planned jerk time.
+
+    With ``jerk_source = 2`` the FMU logs (category ``logEvents``) "t = ... s:
+    f_mode = ... Hz: the stage starting at sample ... keeps its planned jerk
+    time (...)" when the jerk time of ``f_mode`` would no longer land the move
+    without stopping and coming back.  The stage that starts at the next
+    sample (steps of ``Te``), if any, then keeps the jerk time it was planned
+    with.  The FMU logs it at every such ``doStep``, so one stage may be
+    preceded by several.
+
+    Parameters
+    ----------
+    log : sequence of LogRecord
+        The FMU's messages (:attr:`harness.fmu.runner.GeneratorFMU.log`), with
+        ``logEvents`` enabled.
+
+    Returns
+    -------
+    list of float
+        The ``doStep`` times (s), in log order.
+    """
+    out: list[float] = []
+    for rec in log:
+        m = _KEPT.match(rec.message)
+        if m is not None:
+            out.append(float(m.group(1)))
+    return out
+
+
+@dataclass(frozen=True)
+class Ramp:
+    """One ramp of the jerk: a step of ``a_AL`` through its moving average.
+
+    Attributes
+    ----------
+    k : int
+        Index of its first sample (where ``a_AL`` steps).
+    delta_a : float
+        The step of ``a_AL`` (m/s²).
+    N : int or None
+        Its length, the jerk time applied (samples); None when it could not
+        be resolved.
+    jerk : float
+        Its jerk, delta_a / (N·Te) (m/s³); NaN when unresolved.
+    """
+
+    k: int
+    delta_a: float
+    N: int | None
+    jerk: float
+
+
+def jerk_ramps(j: np.ndarray, a_AL: np.ndarray, Te: float) -> tuple[list[Ramp], float]:
+    """Split a sampled jerk into the ramps of the AL acceleration's steps.
+
+    A JL/DJL profile is the AL acceleration ``a_AL`` with each of its steps
+    spread by a moving average (§2.3, Fig. 7): the step Δa at sample k adds a
+    jerk Δa/(N·Te) over the N samples k .. k+N-1, N the jerk time of that
+    stage; ramps may overlap (``short_stage = 2``, moves without a
+    constant-velocity stage).  Walking through the samples, the ramps already
+    found are subtracted from the jerk; what is left where ``a_AL`` steps is
+    the new ramp's jerk, and Δa / (jerk·Te) its length, which must be a whole
+    number.  A change of ``a_AL`` below 1e-9 of its largest value (a
+    re-plan's rounding) is not a step.
+
+    Parameters
+    ----------
+    j : ndarray
+        The jerk over each sample interval (m/s³): the FMU's ``j`` output at
+        every sample (j(t_k) holds over [t_k, t_k + Te), replans included).
+    a_AL : ndarray
+        The FMU's ``a_AL`` output at the same samples (m/s²).
+    Te : float
+        Sampling period (s).
+
+    Returns
+    -------
+    ramps : list of Ramp
+        One per step of ``a_AL``, in order.  After a ramp that could not be
+        resolved (no jerk left for it, or a length that is not a whole
+        number), the later ones are unresolved too.
+    mismatch : float
+        Largest difference between the jerk and the sum of the ramps found
+        (m/s³), over the samples up to the first unresolved ramp: about 1e-12
+        of the jerk when the profile is such a sum.
+    """
+    j = np.asarray(j, dtype=float)
+    a_AL = np.asarray(a_AL, dtype=float)
+    ramps: list[Ramp] = []
+    active: list[tuple[int, float]] = []  # (index after the last sample, jerk)
+    broken = False
+    mismatch = 0.0
+    prev_a = 0.0
+    # a re-plan may move a_AL by a rounding error (1e-13 relative): not a step
+    tiny = 1e-9 * max(1.0, float(np.max(np.abs(a_AL)))) if a_AL.size else 0.0
+    for k in range(j.size):
+        active = [r for r in active if r[0] > k]
+        known = sum(level for _, level in active)
+        da = float(a_AL[k]) - prev_a
+        if abs(da) > tiny:
+            prev_a = float(a_AL[k])
+            N: int | None = None
+            level = float(j[k]) - known
+            if not broken and level != 0.0:
+                ratio = da / (level * Te)
+                if ratio >= 0.5 and abs(ratio - round(ratio)) <= 1e-6 * ratio:
+                    N = round(ratio)
+            if N is None:
+                broken = True
+                ramps.append(Ramp(k, da, None, math.nan))
+                continue
+            active.append((k + N, da / (N * Te)))
+            ramps.append(Ramp(k, da, N, da / (N * Te)))
+            known += da / (N * Te)
+        if not broken:
+            mismatch = max(mismatch, abs(float(j[k]) - known))
+    return ramps, mismatch
+
+
+@dataclass(frozen=True)
+class StageRecord:
+    """One constant-jerk stage of a move, as applied by the FMU.
+
+    Attributes
+    ----------
+    stage : int
+        1 start of acceleration, 2 end of acceleration, 3 start of
+        deceleration, 4 end of deceleration (the FMU's ``stage`` output).
+    t_start : float
+        Its first sample (s): where the FMU's ``stage`` output turns to
+        ``stage``.
+    t_read : float
+        Where the ``f_mode`` it takes was read (s): the ``doStep`` at
+        t_start − Te, whose step ends at its first sample; t_start itself for
+        a stage at the first sample (planned with the ``f_mode`` at hand then).
+    z : float
+        Z position at ``t_read`` (m), the Z generator's output.
+    f_mode : float
+        The ``f_mode`` the master had given the FMU at ``t_read`` (Hz); NaN
+        when not known.
+    N_rule : int
+        The rule's jerk time, round(1/(f·Te)) samples, f the tuned mode's
+        frequency at ``z``.
+    N_applied : int or None
+        The jerk time the FMU applied (samples): the length of the ramp that
+        starts there (:func:`jerk_ramps`), even where it overlaps the next
+        one.  None when no ramp starts there (a stage entered with no step of
+        ``a_AL``) or it could not be resolved.
+    jerk : float
+        That ramp's jerk (m/s³); NaN when none.
+    delta_a : float
+        The step of ``a_AL`` there (m/s²); 0 when none.
+    run : int
+        Samples the ``stage`` output stays at ``stage`` (shorter than the
+        ramp where the next stage starts before the ramp ends).
+    kept : bool
+        The FMU logged at ``t_read`` that the stage keeps its planned jerk
+        time (:func:`kept_jerk_time_steps`): ``N_applied`` is then the one
+        it was planned with, not ``N_rule``.
+    """
+
+    stage: int
+    t_start: float
+    t_read: float
+    z: float
+    f_mode: float
+    N_rule: int
+    N_applied: int | None
+    jerk: float
+    delta_a: float
+    run: int
+    kept: bool = False
+
+
+def stage_records(t: np.ndarray, stage: np.ndarray, j: np.ndarray, a_AL: np.ndarray,
+                  z: np.ndarray, f_of_z: Callable[[float], float], Te: float,
+                  f_mode: np.ndarray | None = None,
+                  kept_at: Sequence[float] = ()) -> list[StageRecord]:
+    """Where each constant-jerk stage starts, which ``f_mode`` it took, how long its ramp lasts.
+
+    Parameters
+    ----------
+    t : ndarray
+        Sample times (s), one per generator sample (communication step ``Te``).
+    stage : ndarray of int
+        The FMU's ``stage`` output at those times (0 when no stage).
+    j : ndarray
+        The FMU's ``j`` output: the jerk over the sample interval that starts
+        at each time (m/s³).
+    a_AL : ndarray
+        The FMU's ``a_AL`` output (m/s²).
+    z : ndarray
+        The Z position at those times (m).
+    f_of_z : callable
+        Frequency (Hz) of the tuned mode at z (m).
+    Te : float
+        Generator sampling period (s).
+    f_mode : ndarray, optional
+        The ``f_mode`` given to the FMU before the ``doStep`` from each time.
+    kept_at : sequence of float
+        Times of the ``doStep`` calls at which the FMU logged keeping a
+        stage's planned jerk time (:func:`kept_jerk_time_steps`).
+
+    Returns
+    -------
+    list of StageRecord
+        One per entry into a stage, in time order; the jerk times are those
+        of :func:`jerk_ramps`.  A stage starting at sample k > 0 takes the
+        ``f_mode`` read at sample k − 1.
+
+    Raises
+    ------
+    ValueError
+        If the times are not one sample apart.
+    """
+    t = np.asarray(t, dtype=float)
+    if t.size > 1 and not np.allclose(np.diff(t), Te, rtol=1e-9, atol=0.0):
+        raise ValueError("stage_records needs one point per generator sample (step = Te)")
+    st = np.asarray(stage, dtype=np.int64)
+    ramps = {r.k: r for r in jerk_ramps(j, a_AL, Te)[0]}
+    kept = np.asarray(sorted(kept_at), dtype=float)
+    out: list[StageRecord] = []
+    n = st.size
+    for k in range(n):
+        s = int(st[k])
+        if s == 0 or (k > 0 and st[k - 1] == s):
+            continue
+        m = k
+        while m < n and st[m] == s:
+            m += 1
+        kr = max(k - 1, 0)
+        f = float(f_of_z(float(z[kr])))
+        r = ramps.get(k)
+        t_read = float(t[kr])
+        was_kept = k > 0 and bool(np.any(np.abs(kept - t_read) <= 1e-6 * Te))
+        out.append(StageRecord(
+            stage=s, t_start=float(t[k]), t_read=t_read, z=float(z[kr]),
+            f_mode=math.nan if f_mode is None else float(f_mode[kr]),
+            N_rule=max(1, round(1.0 / (f * Te))), N_applied=None if r is None else r.N,
+            jerk=math.nan if r is None else r.jerk, delta_a=0.0 if r is None else r.delta_a,
+            run=m - k, kept=was_kept))
+    return out
+
+
+def cosimulate_online(
+    axis: AxisFMU,
+    z_axis: AxisFMU,
+    params: Mapping[str, Any],
+    z_params: Mapping[str, Any],
+    modes: Sequence[ScheduledMode],
+    f_mode_of_z: Callable[[float], float],
+    t_after: float,
+    step: float | None = None,
+    *,
+    t_max: float,
+    profile: str = ONLINE,
+    events: list[LogRecord] | None = None,
+) -> tuple[CoSimResult, dict[str, np.ndarray]]:
+    """Co-simulate the excited axis with ``f_mode`` set from z at every communication point.
+
+    The master of :func:`harness.cosim.cosimulate`, plus one input: before the
+    ``doStep`` from t_k it sets the excited axis' ``f_mode`` to
+    ``f_mode_of_z(z(t_k))``, z(t_k) the Z generator's output at t_k.  The
+    run ends ``t_after`` after both moves have ended (the excited one when its
+    ``done`` output turns true).
+
+    The plant's input over the step from t_k is the jerk ``j(t_k)``: an input
+    read at t_k changes the FMU's plan from the first sample after t_k only,
+    so every output at t_k, ``j`` included, holds over [t_k, t_k + Te) (the
+    FMU's contract), and with h = Te the plant gets the profile's jerk exactly
+    (it equals the chord (a(t_k+1) − a(t_k))/Te to rounding, replans
+    included).  With h = m·Te, ``j(t_k)`` is held over the step as in
+    :func:`harness.cosim.cosimulate` (an approximation: a stage may start
+    within the step).
+
+    Parameters
+    ----------
+    axis, z_axis : AxisFMU
+        The two generator instances (re-planned here).
+    params : mapping
+        The excited axis' parameters (``jerk_source = 2`` for the online rule).
+    z_params : mapping
+        The Z move's parameters.
+    modes : sequence of ScheduledMode
+        The plant's modes.
+    f_mode_of_z : callable
+        z (m) → the frequency (Hz) given to the FMU.
+    t_after : float
+        Simulated time after both moves have ended (s).
+    step : float, optional
+        Communication step, a whole multiple of ``Te`` (default ``Te``).
+    t_max : float
+        Give up (``RuntimeError``) if the excited move has not ended by then (s).
+    profile : str
+        Label of the run.
+    events : list of LogRecord, optional
+        If given, the excited axis' FMU logs its events (category
+        ``logEvents``: replans, stages that keep their planned jerk time)
+        during the run, and they are appended to it; its logging is switched
+        off again afterwards.
+
+    Returns
+    -------
+    run : CoSimResult
+        As :func:`harness.cosim.cosimulate` gives; ``t_end`` is where ``done``
+        turned true.
+    inputs : dict of ndarray
+        ``f_mode`` (the value set before the step from each point; NaN at the
+        last), ``stage``, ``done`` and ``a_AL`` (outputs at each point).
+
+    Raises
+    ------
+    ValueError
+        If ``step`` is not a whole multiple of both FMUs' ``Te``.
+    RuntimeError
+        If the excited axis' move does not end by ``t_max``.
+    FMUError
+        If an FMU call fails (with the FMU's log).
+    """
+    p0 = dict(params)
+    T_x = axis.plan(p0)
+    T_z = z_axis.plan(z_params)
+    gx, gz = axis.g, z_axis.g
+    Te = float(gx.get("Te"))
+    Te_z = float(gz.get("Te"))
+    h = Te if step is None else float(step)
+    for name, te in (("excited axis", Te), ("Z axis", Te_z)):
+        r = h / te
+        if abs(r - round(r)) > 1e-9 * max(1.0, r) or round(r) < 1:
+            raise ValueError(f"communication step {h:g} s is not a whole multiple of the "
+                             f"{name}'s Te = {te:g} s")
+    t_start = float(gx.get("t_start"))
+    z_t_end = float(gz.get("t_start")) + T_z
+    plant = ScheduledPlant(modes)
+    pstep = plant.step_jerk
+    v3x, v3z = gx.fmi_version == 3, gz.fmi_version == 3
+    getx = gx.fmu.getFloat64 if v3x else gx.fmu.getReal
+    getz = gz.fmu.getFloat64 if v3z else gz.fmu.getReal
+    setf = gx.fmu.setFloat64 if v3x else gx.fmu.setReal
+    geti = gx.fmu.getInt32 if v3x else gx.fmu.getInteger
+    getb = gx.fmu.getBoolean
+    stepx, stepz = gx.fmu.doStep, gz.fmu.doStep
+    vrx = gx.vr(["x", "v", "a", "j", "a_AL"])
+    vrz = gz.vr(["x", "v"])
+    vr_f = gx.vr(["f_mode"])
+    vr_stage = gx.vr(["stage"])
+    vr_done = gx.vr(["done"])
+
+    ox = list(getx(vrx))
+    oz = list(getz(vrz))
+    X, Z, E, S = [ox], [oz], [0.0], [tuple(plant.state)]
+    F: list[float] = []
+    STAGE = [int(geti(vr_stage)[0])]
+    DONE = [bool(getb(vr_done)[0])]
+    half = 0.125 * h
+    k_start = max(0, math.ceil(t_start / h - 1e-9))
+    k_end: int | None = None
+    n_stop: int | None = None
+    n_max = math.ceil(t_max / h)
+    from fmpy.fmi1 import FMICallException
+
+    n_log = len(gx.log)
+    if events is not None:
+        gx.fmu.setDebugLogging(True, ["logEvents"])
+    t0 = time.perf_counter()
+    k = 0
+    try:
+        while n_stop is None or k < n_stop:
+            if n_stop is None and k >= n_max:
+                raise RuntimeError(f"the online move has not ended by t = {t_max:g} s (its "
+                                   f"done output is still false)")
+            tk = k * h
+            f = f_mode_of_z(oz[0])
+            F.append(f)
+            try:
+                setf(vr_f, [f])
+            except FMICallException as e:
+                raise FMUError(str(getattr(e, "function", "setReal")), int(e.status), gx.log,
+                               variable="f_mode", value=f) from None
+            stepx(tk, h)
+            stepz(tk, h)
+            ox1 = getx(vrx)
+            oz1 = getz(vrz)
+            zm = 0.5 * (oz[0] + oz1[0]) + half * (oz[1] - oz1[1])
+            # j(t_k) holds over [t_k, t_k + Te): f_mode read at t_k acts from the next sample
+            E.append(pstep(h, ox[2], ox[3], zm))
+            S.append(tuple(plant.state))
+            X.append(ox1)
+            Z.append(oz1)
+            STAGE.append(int(geti(vr_stage)[0]))
+            DONE.append(bool(getb(vr_done)[0]))
+            ox, oz = ox1, oz1
+            k += 1
+            if k_end is None and k > k_start and DONE[-1]:
+                k_end = k
+                t_both = max(k * h, z_t_end)
+                n_stop = math.ceil((t_both + t_after) / h - 1e-9)
+    except FMICallException as e:
+        raise FMUError(str(getattr(e, "function", "doStep")), int(e.status),
+                       gx.log + gz.log) from None
+    finally:
+        if events is not None:
+            events.extend(gx.log[n_log:])
+            try:
+                gx.fmu.setDebugLogging(False, [])
+            except FMICallException:  # the instance failed: its error is the one to report
+                pass
+    wall = time.perf_counter() - t0
+    gx.time = gz.time = k * h
+    n = k
+    F.append(math.nan)
+    assert k_end is not None
+
+    t = h * np.arange(n + 1)
+    Xa = np.asarray(X, dtype=float)
+    Za = np.asarray(Z, dtype=float)
+    Sa = np.asarray(S, dtype=float)
+    nm = len(plant.modes)
+    f_modes = np.vstack([m.f_array(Za[:, 0]) for m in plant.modes])
+    state_end = [(float(Sa[k_end, 2 * i]), float(Sa[k_end, 2 * i + 1])) for i in range(nm)]
+    modes_end = [m.at(float(Za[k_end, 0])) for m in plant.modes]
+    x0 = float(params.get("x0", gx.get("x0")))
+    dist = float(params.get("distance", gx.get("distance")))
+    t_end = k_end * h
+    run = CoSimResult(
+        profile=profile, t=t, x=Xa[:, 0], v=Xa[:, 1], a=Xa[:, 2], j=Xa[:, 3],
+        z=Za[:, 0], v_z=Za[:, 1], eps=np.asarray(E), eps_modes=Sa[:, 0::2].T.copy(),
+        f=f_modes, t_start=t_start, t_end=t_end, z_t_end=z_t_end, x0=x0, target=x0 + dist,
+        state_end=state_end, modes_end=modes_end, N_F=axis.N_F(), Te=Te, step=h,
+        z_v_max=float(z_params.get("v_max", math.nan)), fmi_version=gx.fmi_version,
+        wall_time=wall, final_state=list(plant.state),
+        final_modes=[m.at(float(Za[-1, 0])) for m in plant.modes],
+        plan_info={**plan_info(axis, z_axis, T_x, T_z), "motion_time": t_end - t_start},
+    )
+    inputs = {"f_mode": np.asarray(F), "stage": np.asarray(STAGE, dtype=np.int64),
+              "done": np.asarray(DONE, dtype=bool), "a_AL": Xa[:, 4].copy()}
+    return run, inputs
+
+
+@dataclass
+class OnlineResult:
+    """The online-f_mode DJL next to the offline-tuned DJL, on one scenario.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        The scenario (a single move).
+    online : CoSimResult
+        The run with ``jerk_source = 2``, ``f_mode`` set from z at every step.
+    offline : CoSimResult
+        The offline-tuned DJL (:meth:`harness.cosim.Session.tune`).
+    offline_tuning : TuningResult or None
+        How the offline jerk times were found (None when the scenario imposes them).
+    f_mode : ndarray
+        The ``f_mode`` set before the step from each point of ``online.t`` (Hz;
+        NaN at the last point).
+    stage : ndarray of int
+        The FMU's ``stage`` output at each point of the online run.
+    done : ndarray of bool
+        Its ``done`` output.
+    stages : list of StageRecord
+        The online run's stages: start, z and f_mode there, the rule's and the
+        applied jerk times (empty when the step is not ``Te``: the ramps are
+        then not seen sample by sample).
+    metrics : dict of str to ProfileMetrics
+        ``DJL-online`` and the offline profile's name: residual, motion time,
+        settling time in the scenario's band.
+    band : float
+        That band (m).
+    band_label : str
+        Where the band comes from.
+    offline_profile : str
+        Label of the offline run (``"DJL"``, or e.g. ``"DJL-optimal"``).
+    a_AL : ndarray
+        The online FMU's ``a_AL`` output at each point.
+    ramps : list of Ramp
+        The online jerk split into the ramps of ``a_AL``'s steps
+        (:func:`jerk_ramps`; empty when the step is not ``Te``).
+    ramp_mismatch : float
+        Largest difference between the jerk and the sum of those ramps (m/s³).
+    events : list of LogRecord
+        What the online FMU logged during the run (category ``logEvents``:
+        its replans, and the stages that keep their planned jerk time).
+    """
+
+    scenario: Scenario
+    online: CoSimResult
+    offline: CoSimResult
+    offline_tuning: TuningResult | None
+    f_mode: np.ndarray
+    stage: np.ndarray
+    done: np.ndarray
+    stages: list[StageRecord]
+    metrics: dict[str, ProfileMetrics]
+    band: float
+    band_label: str
+    offline_profile: str = "DJL"
+    a_AL: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    ramps: list[Ramp] = field(default_factory=list)
+    ramp_mismatch: float = math.nan
+    events: list[LogRecord] = field(default_factory=list)
+
+    @property
+    def offline_N_F(self) -> tuple[int, int, int, int]:
+        """Jerk times of the offline run (samples)."""
+        return self.offline.N_F
+
+    @property
+    def online_N_F(self) -> tuple[int | None, ...]:
+        """Jerk times the FMU applied online, one per stage entered (samples).
+
+        None where not resolved (see :attr:`StageRecord.N_applied`).
+        """
+        return tuple(s.N_applied for s in self.stages)
+
+    @staticmethod
+    def overshoot(run: CoSimResult) -> float:
+        """Largest excursion of a run's reference past its target (m; 0 if none)."""
+        sign = 1.0 if run.target >= run.x0 else -1.0
+        return max(0.0, float(np.max(sign * (run.x - run.target))))
+
+    @staticmethod
+    def backward_travel(run: CoSimResult) -> float:
+        """Largest distance a run's reference moves back, against its direction (m; 0 if none).
+
+        A rest-to-rest move never moves back; a move whose deceleration misses
+        the target and is corrected does.
+        """
+        sign = 1.0 if run.target >= run.x0 else -1.0
+        y = sign * run.x
+        return max(0.0, float(np.max(np.maximum.accumulate(y) - y)))
+
+    def rows(self) -> list[dict[str, Any]]:
+        """CSV rows: one per run (metrics and jerk times), then one per online stage."""
+        blank_stage = {"stage": "", "t_stage_s": "", "t_read_s": "", "z_m": "", "f_mode_hz": "",
+                       "N_rule": "", "N_applied": "", "kept_planned": "",
+                       "stage_run_samples": ""}
+        rows: list[dict[str, Any]] = []
+        for name, run in ((self.offline_profile, self.offline), (ONLINE, self.online)):
+            m = self.metrics[name]
+            N = self.online_N_F if name == ONLINE else run.N_F
+            rows.append({
+                "scenario": self.scenario.name, "row": "run", "profile": name,
+                "jerk_times_samples": "/".join("?" if n is None else str(n) for n in N),
+                "residual_m": m.residual, "residual_peak_m": m.residual_peak,
+                "motion_time_s": m.motion_time, "settling_time_s": m.settling_time,
+                "band_m": m.band, "end_error_m": float(run.x[-1] - run.target),
+                "overshoot_m": self.overshoot(run),
+                "backward_travel_m": self.backward_travel(run), **blank_stage,
+            })
+        for s in self.stages:
+            rows.append({
+                "scenario": self.scenario.name, "row": "stage", "profile": ONLINE,
+                "jerk_times_samples": "", "residual_m": "", "residual_peak_m": "",
+                "motion_time_s": "", "settling_time_s": "", "band_m": "", "end_error_m": "",
+                "overshoot_m": "", "backward_travel_m": "", "stage": s.stage,
+                "t_stage_s": s.t_start, "t_read_s": s.t_read, "z_m": s.z,
+                "f_mode_hz": s.f_mode, "N_rule": s.N_rule,
+                "N_applied": "" if s.N_applied is None else s.N_applied,
+                "kept_planned": int(s.kept), "stage_run_samples": s.run,
+            })
+        return rows
+
+    def table(self) -> str:
+        """Plain-text summary: the two runs side by side, then the online stages."""
+        off, on = self.offline_profile, ONLINE
+        mo, mn = self.metrics[off], self.metrics[on]
+        Te = self.online.Te
+        how = (self.offline_tuning.describe() if self.offline_tuning is not None
+               else "jerk times imposed by the scenario")
+        jt = "/".join(f"{n * Te * 1e3:.0f}" for n in self.offline_N_F)
+        w = max(16, len(off) + 2, len(jt) + 2)
+        lines = [
+            f"Scenario {self.scenario.name}: DJL with f_mode online (jerk_source = 2) "
+            f"against offline-tuned {off}",
+            f"  offline: {how}",
+            f"  online: f_mode = f(z(t_k)) of the tuned mode, set before every step of "
+            f"{self.online.step * 1e3:g} ms; the same Z move (v_max {self.online.z_v_max:.4g} "
+            f"m/s)",
+            "",
+            f"{'':32s}{off:>{w}s}{on:>{w}s}",
+            f"{'jerk times [ms]':32s}{jt:>{w}s}{'(stages below)':>{w}s}",
+            f"{'residual vibration [mm]':32s}{mo.residual * 1e3:{w}.4g}{mn.residual * 1e3:{w}.4g}",
+            f"{'peak |eps| after motion [mm]':32s}{mo.residual_peak * 1e3:{w}.4g}"
+            f"{mn.residual_peak * 1e3:{w}.4g}",
+            f"{'motion time [s]':32s}{mo.motion_time:{w}.4f}{mn.motion_time:{w}.4f}",
+            f"{'settling time [s]':32s}{_fmt(mo.settling_time):>{w}s}"
+            f"{_fmt(mn.settling_time):>{w}s}",
+            f"{'overshoot past the target [mm]':32s}{self.overshoot(self.offline) * 1e3:{w}.4g}"
+            f"{self.overshoot(self.online) * 1e3:{w}.4g}",
+            f"{'backward travel [mm]':32s}{self.backward_travel(self.offline) * 1e3:{w}.4g}"
+            f"{self.backward_travel(self.online) * 1e3:{w}.4g}",
+            f"{'end position error [m]':32s}{self.offline.x[-1] - self.offline.target:{w}.2g}"
+            f"{self.online.x[-1] - self.online.target:{w}.2g}",
+            f"  settling {self.band_label}: +/-{self.band * 1e3:.3g} mm",
+        ]
+        if self.stages:
+            lines += ["", f"Online stages ({len(self.stages)} entered; start: the FMU's stage "
+                          f"output; z, f_mode: where the f_mode the stage takes was read, the "
+                          f"step before its start; N applied: the length of the jerk ramp "
+                          f"starting there (the jerk split into the ramps of a_AL's steps, "
+                          f"largest misfit {self.ramp_mismatch:.1e} m/s3; '?': no ramp starts "
+                          f"there; 'kept': the FMU kept the planned jerk time, the rule's would "
+                          f"not land without moving back); run: samples the stage output "
+                          f"stays):",
+                      f"  {'stage':>5s} {'t [s]':>8s} {'z [m]':>8s} {'f_mode [Hz]':>12s} "
+                      f"{'round(1/(f Te))':>16s} {'N applied':>10s} {'run':>6s}"]
+            for s in self.stages:
+                na = "?" if s.N_applied is None else str(s.N_applied)
+                lines.append(f"  {s.stage:5d} {s.t_start:8.3f} {s.z:8.4f} {s.f_mode:12.4f} "
+                             f"{s.N_rule:16d} {na:>10s} {s.run:6d}"
+                             + ("  kept" if s.kept else ""))
+        elif abs(self.online.step - Te) > 1e-12 * Te:
+            lines += ["", f"(stages not measured: the step {self.online.step * 1e3:g} ms is not "
+                          f"Te = {Te * 1e3:g} ms)"]
+        if self.offline_tuning is not None and self.offline_tuning.instants:
+            tu = self.offline_tuning
+            lines += ["", f"Offline {off} stage starts [s]: "
+                      + "/".join(f"{x:.3f}" for x in tu.instants)
+                      + ", z there [m]: " + "/".join(f"{x:.4f}" for x in tu.z)]
+        return "\n".join(lines)
+
+    def plot(self, title: str | None = None):
+        """Figure: x, v, a, j; stage and f_mode; deflection; z; return it."""
+        import matplotlib.pyplot as plt
+
+        runs = {self.offline_profile: self.offline, ONLINE: self.online}
+        colors = {self.offline_profile: "tab:red", ONLINE: "tab:green"}
+        fig, axes = plt.subplots(4, 2, sharex=True, figsize=(13, 9))
+        left, right = axes[:, 0], axes[:, 1]
+        for name, r in runs.items():
+            c, m = colors[name], self.metrics[name]
+            ls = "-" if name == ONLINE else "--"
+            left[0].plot(r.t, r.x, c, ls=ls, label=name)
+            left[1].plot(r.t, r.v, c, ls=ls)
+            left[2].plot(r.t, r.a, c, ls=ls)
+            left[3].plot(r.t, r.j, c, ls=ls, drawstyle="steps-post")
+            right[2].plot(r.t, r.eps * 1e3, c, lw=1.0, ls=ls,
+                          label=f"{name}: residual {m.residual * 1e3:.3g} mm, motion "
+                                f"{m.motion_time:.3f} s")
+            right[2].axvline(r.t_end, color=c, ls=":", lw=1.0)
+            right[3].plot(r.t, r.z, c, ls=ls, label=name)
+        on = self.online
+        right[0].plot(on.t, self.stage, "tab:green", drawstyle="steps-post",
+                      label="stage (online FMU output)")
+        right[0].set_ylabel("stage")
+        right[0].set_yticks([0, 1, 2, 3, 4])
+        for s in self.stages:
+            right[0].annotate("?" if s.N_applied is None else f"{s.N_applied}",
+                              (s.t_start, s.stage), fontsize="x-small",
+                              xytext=(2, 3), textcoords="offset points")
+        right[1].plot(on.t, self.f_mode, "tab:green", drawstyle="steps-post",
+                      label="f_mode given to the FMU")
+        right[1].plot(on.t, on.f[self.scenario.modemap.tune], "k:", lw=0.8,
+                      label="f(z(t)) of the tuned mode")
+        for s in self.stages:
+            right[1].plot(s.t_read, s.f_mode, "o", color="tab:green", ms=4)
+        if self.offline_tuning is not None:
+            tu = self.offline_tuning
+            right[1].plot(tu.instants, [1.0 / p for p in tu.periods], "x", color="tab:red",
+                          label=f"offline {self.offline_profile}: tuned at the stage starts")
+        right[1].set_ylabel("f [Hz]")
+        right[1].legend(fontsize="x-small", loc="upper right")
+        right[2].set_ylabel("ε [mm]")
+        right[2].axhspan(-self.band * 1e3, self.band * 1e3, color="gold", alpha=0.35, lw=0)
+        right[2].legend(fontsize="x-small", loc="upper right")
+        right[3].set_ylabel("z [m]")
+        for ax, lab in zip(left, ("x [m]", "v [m/s]", "a [m/s²]", "j [m/s³]"), strict=True):
+            ax.set_ylabel(lab)
+        left[0].legend(fontsize="small", loc="lower right")
+        for ax in axes.ravel():
+            ax.grid(True, alpha=0.3)
+        t_end = max(self.online.t_end, self.offline.t_end)
+        left[0].set_xlim(0.0, min(float(self.online.t[-1]), t_end + 1.0))
+        left[3].set_xlabel("t [s]")
+        right[3].set_xlabel("t [s]")
+        fig.suptitle(title or f"{self.scenario.name}: DJL with f_mode online vs "
+                              f"offline-tuned {self.offline_profile}")
+        fig.tight_layout()
+        return fig
+
+
+def _fmt(x: float) -> str:
+    return "never" if math.isinf(x) else f"{x:.3f}"
+
+
+def run_online(scenario: Scenario | str | Path, *, fmu: str | Path | None = None,
+               fmi_version: int | None = None, step: float | None = None,
+               offline: str = "DJL", session: Session | None = None) -> OnlineResult:
+    """Co-simulate DJL with ``f_mode`` given online, next to the offline-tuned DJL.
+
+    Parameters
+    ----------
+    scenario : Scenario, str or Path
+        A single-move scenario, a TOML file or an embedded name (``X``, ``Y``).
+    fmu : path-like, optional
+        A generator FMU file with the commanded interface (overrides the scenario's).
+    fmi_version : {2, 3}, optional
+        FMI version of the package's FMU (overrides the scenario's).
+    step : float, optional
+        Communication step (s), a whole multiple of ``Te``; default the
+        scenario's ``simulation.step``.  The per-stage jerk times are measured
+        when it is ``Te``.
+    offline : str
+        The offline profile compared: ``"DJL"`` (the scenario's DJL tuning,
+        the paper's rule by default) or a variant such as ``"DJL-optimal"``.
+    session : Session, optional
+        FMU-engine instances to reuse (they are re-planned).
+
+    Returns
+    -------
+    OnlineResult
+
+    Raises
+    ------
+    ValueError
+        A sweep, a step that is not a whole multiple of ``Te``, a session on
+        the fast engine, or an FMU without the commanded interface.
+    """
+    sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+    if fmu is not None or fmi_version is not None:
+        sc = sc.with_fmu(Path(fmu) if fmu is not None else None, fmi_version)
+    if sc.is_sweep:
+        raise ValueError(f"{sc.name}: the online co-simulation runs a single move, not a sweep")
+    if not offline.split("-")[0] == "DJL":
+        raise ValueError(f"offline profile must be DJL or a DJL variant, got {offline!r}")
+    if session is not None and session.engine != "fmu":
+        raise ValueError("the online co-simulation steps the FMUs: give a session on the "
+                         "'fmu' engine")
+    own = session is None
+    if session is None:
+        session = Session(sc.simulation.fmu, sc.simulation.fmi_version, engine="fmu")
+    try:
+        return _run(sc, session, step, offline)
+    finally:
+        if own:
+            session.close()
+
+
+def _run(sc: Scenario, session: Session, step: float | None, offline: str) -> OnlineResult:
+    from .evaluation import _jerk_times
+
+    names = {v.name for v in session.axis.g.md.modelVariables}
+    missing = [n for n in COMMANDED_VARIABLES if n not in names]
+    if missing:
+        raise ValueError(f"{session.axis.g.path}: the FMU lacks the commanded interface "
+                         f"(issue #12): no {', '.join(missing)}")
+    if step is not None:
+        h = float(step)
+        r = h / sc.simulation.Te
+        if not (math.isfinite(r) and round(r) >= 1 and abs(r - round(r)) <= 1e-9 * r):
+            raise ValueError(f"step {step!r} s is not a whole multiple of Te = "
+                             f"{sc.simulation.Te:g} s")
+        sc = dataclasses.replace(sc, simulation=dataclasses.replace(sc.simulation, step=h))
+    h = sc.simulation.step
+    tuning = session.tune(sc, offline)
+    T_F = _jerk_times(sc, "DJL", tuning)
+    off = session.run(sc, offline, T_F)
+
+    # the online run: the same move and Z move, jerk times from f_mode
+    mode = sc.modemap.tuned
+    params = session.move_params(sc, "DJL", T_F)
+    params["jerk_source"] = JERK_SOURCE_F_MODE
+    params["f_mode"] = mode.f(sc.z.z0)
+    T_x = off.plan_info["motion_time"]
+    v_z, _ = session.z_velocity(sc, T_x)
+    zp = session.z_move_params(sc, v_z)
+    t_max = sc.move.t_start + 2.0 * T_x + off.plan_info["z_motion_time"] + 1.0
+    events: list[LogRecord] = []
+    on, rec = cosimulate_online(session.axis, session.z_axis, params, zp,
+                                sc.modemap.scheduled(), mode.f, sc.simulation.t_after, h,
+                                t_max=t_max, events=events)
+    on.z_synced = off.z_synced
+    Te = sc.simulation.Te
+    stages: list[StageRecord] = []
+    ramps: list[Ramp] = []
+    mismatch = math.nan
+    if abs(h - Te) <= 1e-9 * Te:
+        stages = stage_records(on.t, rec["stage"], on.j, rec["a_AL"], on.z, mode.f, Te,
+                               rec["f_mode"], kept_jerk_time_steps(events))
+        ramps, mismatch = jerk_ramps(on.j, rec["a_AL"], Te)
+
+    # metrics: one band for both (the scenario's settle_band)
+    spec = sc.simulation.settle_band
+    residuals = {offline: off.free_amplitude, ONLINE: on.free_amplitude,
+                 "DJL": off.free_amplitude}
+    if spec.needs == "AL":
+        from .robustness import t_stop_after_motion
+
+        al = session.run(sc, "AL", None, t_stop=t_stop_after_motion(sc, session, "AL", None))
+        residuals["AL"] = al.free_amplitude
+    band = spec.resolve(residuals)
+    if not band > 0:
+        band = 1e-9
+    metrics = {offline: profile_metrics(off, band), ONLINE: profile_metrics(on, band)}
+    return OnlineResult(sc, on, off, tuning, rec["f_mode"], rec["stage"], rec["done"], stages,
+                        metrics, band, spec.label, offline_profile=offline, a_AL=rec["a_AL"],
+                        ramps=ramps, ramp_mismatch=mismatch, events=events)
+

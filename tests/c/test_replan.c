@@ -1,0 +1,327 @@
+/*
+ * test_replan.c -- commanded moves (djl_replan, djl_jerk_times_due) under
+ * random command sequences, meant to run under AddressSanitizer + UBSan
+ * (tests/test_c_sanitizers.py) and, for the campaign of docs/generator.md, at
+ * -O2 with many cases.
+ *
+ * Each case plans a random motion (test_core.c's everyday and round-number
+ * families), then steps it like a master does the FMU: whole samples, or
+ * steps of 0.37 Te, commands at random steps: a new target (anywhere within
+ * a few times the move), a stop, and in "f_mode" cases (JL/DJL single moves
+ * ending at rest) new jerk times at random steps, even at every step, applied
+ * as the FMU applies them (djl_jerk_times_due).  Checked on the sampled
+ * outputs, independently of the planner:
+ *  - a command does not change the outputs at the time it is given, nor the jerk
+ *    until the next sample (a command acts from the first sample after it);
+ *  - every output finite; |v| <= v_max; |a| <= max(a_max, d_max); |j| <=
+ *    (a_max + d_max) / (N Te) for the shortest jerk time N ever used (two
+ *    ramps of the same sign may overlap, as in planned motions); every step
+ *    of a plan has |A| <= max(a_max, d_max) and its stage's jerk time;
+ *  - x, v, a continuous: at whole-sample steps, x and v at each sample equal
+ *    the cubic of the previous sample (its x, v, a and the jerk over the
+ *    interval) to 1e-9;
+ *  - with f_mode, every ramp that starts has the jerk time of the frequency
+ *    in force at its start (but a stage-ending one changed to keep v_max,
+ *    which the replan reports);
+ *  - the motion ends (in a bounded time) exactly at the last target, at rest
+ *    (1e-9 of the move), or at rest after a stop, and stays there.
+ *
+ * Usage: test_replan [cases] [seed]
+ */
+#define main test_core_main /* test_core.c: its parameter families */
+#include "test_core.c"
+#undef main
+
+/* failures: test_core.c's count */
+#define CHECK(cond, ...)                                                                         \
+    do {                                                                                         \
+        if (!(cond)) FAIL(__VA_ARGS__);                                                          \
+    } while (0)
+
+static djl_plan plan, scratch; /* large: off the stack */
+
+typedef struct {
+    long cases, commands, stops, targets, fchanges, replans_f, clipped, fallbacks, skipped;
+    long declined;
+} tally;
+
+static int32_t N_of(double f, double Te)
+{
+    double r = floor(1.0 / (f * Te) + 0.5);
+    return r < 1.0 ? 1 : r > 1e6 ? 1000000 : (int32_t)r;
+}
+
+static void run_case(tally *t, long ci)
+{
+    djl_params p;
+    djl_error e;
+    djl_sample s, prev;
+    djl_goal g;
+    int32_t cur = 0, Nf = 0, Nmin;
+    int i, fmode, whole, have = 0, last_kind = 0, stopped_fixed = 0, ncmd;
+    double off = 0.0, phase = 0.0, h, target, lvl, scale, f = 0.0;
+    double exempt[16]; /* absolute samples of ramps that keep or adjust their jerk time */
+    int n_exempt = 0;
+    long n = 0, n_end, next_cmd, limit;
+    if (urand() < 0.5)
+        classic_params(&p);
+    else
+        grid_params(&p);
+    p.x0 = urand() < 0.5 ? 0.0 : (urand() - 0.5) * 10.0;
+    fmode = p.profile != DJL_PROFILE_AL && urand() < 0.35;
+    if (fmode) {
+        /* jerk times from a frequency: a single move ending at rest */
+        p.n_segments = 0;
+        p.v_e = 0.0;
+        if (p.distance == 0.0) p.distance = 0.1 * p.v_max;
+        if (p.v0 * p.distance < 0.0) p.v0 = 0.0;
+        f = 1.0 / (p.Te * (1.0 + irand(60)));
+        Nf = N_of(f, p.Te);
+        p.profile = DJL_PROFILE_DJL;
+        for (i = 0; i < 4; i++) p.T_F[i] = Nf * p.Te;
+    }
+    if (djl_plan_motion(&p, &plan, &e) != DJL_OK || plan.k_end > 200000) {
+        t->skipped++;
+        return;
+    }
+    t->cases++;
+    lvl = fmax(p.a_max, p.d_max);
+    Nmin = 1000000000;
+    for (i = 0; i < 4; i++)
+        if (plan.N[i] > 0 && plan.N[i] < Nmin) Nmin = plan.N[i];
+    target = p.x0;
+    if (p.n_segments == 0)
+        target += p.distance;
+    else
+        for (i = 0; i < p.n_segments; i++) target += p.seg_distance[i];
+    last_kind = p.n_segments == 0 && p.v_e == 0.0 ? 1 : 0; /* 0: ends moving */
+    scale = fabs(target - p.x0) + p.v_max * p.Te + 1e-300;
+    whole = urand() < 0.8;
+    h = whole ? 1.0 : 0.37; /* in samples */
+    ncmd = 1 + irand(6);
+    next_cmd = irand((int)(plan.k_end * 1.1) + 2);
+    limit = 4 * plan.k_end + 100000;
+    memset(&prev, 0, sizeof prev);
+    for (;;) {
+        double u = (double)n - off + phase, un;
+        int cmd = 0;
+        if (n >= next_cmd && ncmd > 0) cmd = urand() < 0.25 ? 2 : 1;
+        if (cmd) {
+            djl_replan_info info;
+            djl_sample before, after;
+            int32_t c0 = 0, c1 = 0;
+            djl_eval(&plan, u, &c0, &before);
+            memset(&g, 0, sizeof g);
+            g.kind = cmd == 2 ? DJL_GOAL_STOP : DJL_GOAL_TARGET;
+            g.target = target + (urand() - 0.5) * 4.0 * scale;
+            if (urand() < 0.1) g.target = target; /* the same target again */
+            for (i = 0; i < 4; i++) g.N[i] = fmode ? Nf : plan.N[i];
+            if (!fmode && urand() < 0.2 && p.profile != DJL_PROFILE_AL) /* new jerk times */
+                for (i = 0; i < 4; i++) g.N[i] = 1 + irand(40);
+            for (i = 0; i < 4; i++)
+                if (g.N[i] > 0 && g.N[i] < Nmin) Nmin = g.N[i];
+            if (djl_replan(&plan, u, &g, &plan, &scratch, &info, &e) != DJL_OK) {
+                CHECK(0, "case %ld: replan at %g refused: %s", ci, u, e.message);
+                return;
+            }
+            off += (double)info.origin;
+            t->commands++;
+            if (cmd == 2) t->stops++; else t->targets++;
+            if (info.how == 2) t->fallbacks++;
+            if (info.clipped) t->clipped++;
+            if (info.clipped)
+                for (i = 0; i < plan.n_steps; i++)
+                    if (plan.step[i].N > 0 && plan.step[i].N < Nmin) Nmin = plan.step[i].N;
+            u = (double)n - off + phase;
+            djl_eval(&plan, u, &c1, &after);
+            if (getenv("TEST_REPLAN_DEBUG"))
+                fprintf(stderr, "case %ld: n %ld u %g kind %d target %g how %d end_at %lld "
+                        "v_settled %g clipped %d k_end %lld N %d/%d/%d/%d\n", ci, n, u, g.kind,
+                        g.target, (int)info.how, (long long)info.end_at, info.v_settled,
+                        (int)info.clipped, (long long)plan.k_end, (int)g.N[0], (int)g.N[1],
+                        (int)g.N[2], (int)g.N[3]);
+            /* unfiltered (AL) steps at the sample itself change a there (right-continuous) */
+            CHECK(fabs(after.x - before.x) <= 1e-12 * (fabs(before.x) + scale) &&
+                      fabs(after.v - before.v) <= 1e-12 * p.v_max &&
+                      fabs(after.a - before.a) <= 1e-9 * lvl &&
+                      fabs(after.j - before.j) <= 1e-9 * fabs(before.j) + 1e-300,
+                  "case %ld: the command at %g changed the outputs at its time: x %.17g -> "
+                  "%.17g, v %.17g -> %.17g, a %.17g -> %.17g", ci, u, before.x, after.x, before.v,
+                  after.v, before.a, after.a);
+            last_kind = cmd;
+            if (cmd == 1) target = g.target;
+            stopped_fixed = 0;
+            ncmd--;
+            next_cmd = n + 1 + irand((int)fmin(plan.k_end * 1.2, 1e9) + 2);
+            {
+                /* no slower than stopping at d_max, then moving at the limits (each with
+                 * its jerk times), twice over */
+                double v = fabs(before.v), Nx = 0.0, bound;
+                for (i = 0; i < 4; i++) Nx = fmax(Nx, fmax(g.N[i], plan.N[i]));
+                for (i = 0; i < plan.n_steps; i++) Nx = fmax(Nx, plan.step[i].N); /* kept */
+                bound = v / p.d_max + (g.kind == DJL_GOAL_STOP ? 0.0
+                        : (fabs(g.target - before.x) + v * v / (2 * p.d_max)) / p.v_max +
+                          p.v_max / p.a_max + p.v_max / p.d_max);
+                bound = 2.0 * (bound / p.Te + 6.0 * (Nx + 1.0)) + 10.0;
+                CHECK(plan.k_end <= bound, "case %ld: a command at %ld makes a motion of %lld "
+                      "samples, more than %g", ci, n, (long long)plan.k_end, bound);
+            }
+            limit = n + 4 * (long)fmin(plan.k_end, 1e8) + 100000;
+        }
+        /* jerk times from f_mode (as the FMU applies them, once per step) */
+        if (fmode) {
+            double from = u, at;
+            int it, now = u >= 0.0;
+            if (urand() < 0.3) {
+                f *= exp((urand() - 0.5) * 0.6);
+                if (urand() < 0.02) f = 1.0 / (p.Te * (1.0 + irand(60))); /* a jump */
+                Nf = N_of(f, p.Te);
+                if (Nf < Nmin) Nmin = Nf;
+                t->fchanges++;
+            }
+            memset(&g, 0, sizeof g);
+            g.kind = last_kind == 2 ? DJL_GOAL_STOP : DJL_GOAL_TARGET;
+            g.target = target;
+            for (i = 0; i < 4; i++) g.N[i] = Nf;
+            g.no_stop_first = 1;
+            g.keep_speed = 1;
+            n_exempt = 0;
+            for (it = 0; it < 8; it++) {
+                djl_replan_info info;
+                djl_status st;
+                double o;
+                if (!djl_jerk_times_due(&plan, from, u + h, g.N, now, &at)) break;
+                st = djl_replan(&plan, at, &g, &plan, &scratch, &info, &e);
+                if (st == DJL_E_INFEASIBLE) { /* the stage keeps its planned jerk time */
+                    t->declined++;
+                    if (n_exempt < 16) exempt[n_exempt++] = floor(at) + 1.0 + off;
+                    from = floor(at) + 1.0;
+                    now = 0;
+                    continue;
+                }
+                if (st != DJL_OK) {
+                    CHECK(0, "case %ld: f_mode replan at %g refused: %s", ci, at, e.message);
+                    return;
+                }
+                t->replans_f++;
+                if (getenv("TEST_REPLAN_DEBUG"))
+                    fprintf(stderr, "case %ld: n %ld f-replan at %g N %d how %d end_at %lld "
+                            "v_settled %g clipped %d\n", ci, n, at, (int)Nf, (int)info.how,
+                            (long long)info.end_at, info.v_settled, (int)info.clipped);
+                if (getenv("TEST_REPLAN_STEPS"))
+                    for (i = 0; i < plan.n_steps; i++)
+                        fprintf(stderr, "    tau %lld A %.6g N %d stage %d (k_end %lld)\n",
+                                (long long)plan.step[i].tau, plan.step[i].A, (int)plan.step[i].N,
+                                (int)plan.step[i].stage, (long long)plan.k_end);
+                if (info.clipped) {
+                    t->clipped++;
+                    for (i = 0; i < plan.n_steps; i++)
+                        if (plan.step[i].N > 0 && plan.step[i].N < Nmin) Nmin = plan.step[i].N;
+                }
+                if ((info.clipped || info.lengthened) && n_exempt < 16)
+                    exempt[n_exempt++] = (double)info.end_at + off;
+                o = floor(at);
+                off += o;
+                u -= o;
+                from = 1.0;
+                now = 0;
+            }
+            /* the ramps starting within this step take Nf (but those above) */
+            for (i = 0; i < plan.n_steps; i++) {
+                const djl_step *st = &plan.step[i];
+                int k, ex = 0;
+                for (k = 0; k < n_exempt; k++) ex |= exempt[k] == (double)st->tau + off;
+                if ((double)st->tau >= floor(u) + 1.0 && (double)st->tau < floor(u + h) + 1.0 && !ex)
+                    CHECK(st->N == Nf, "case %ld: a ramp of stage %d starts at %lld with %d "
+                          "samples, f_mode gives %d", ci, (int)st->stage, (long long)st->tau,
+                          (int)st->N, (int)Nf);
+            }
+        }
+        /* the interval from now on is the new plan's (a command acts from the sample at
+         * or after it): the jerk it will have */
+        if (have && whole) {
+            int32_t c2 = 0;
+            double x = prev.x, v = prev.v, a = prev.a;
+            djl_eval(&plan, u, &c2, &prev);
+            CHECK(fabs(prev.x - x) <= 1e-12 * (fabs(x) + scale) && fabs(prev.v - v) <= 1e-12 *
+                  p.v_max && fabs(prev.a - a) <= 1e-9 * lvl,
+                  "case %ld: replans changed the outputs at %g", ci, u);
+        }
+        /* step */
+        phase += h;
+        while (phase >= 1.0 - 1e-9) {
+            phase -= 1.0;
+            n++;
+        }
+        if (phase < 1e-9) phase = 0.0;
+        un = (double)n - off + phase;
+        djl_eval(&plan, un, &cur, &s);
+        CHECK(isfinite(s.x) && isfinite(s.v) && isfinite(s.a) && isfinite(s.j) &&
+                  isfinite(s.x_al) && isfinite(s.v_al) && isfinite(s.a_al),
+              "case %ld: output not finite at %ld", ci, n);
+        CHECK(fabs(s.v) <= p.v_max * (1 + 1e-12), "case %ld: |v| = %.17g > v_max = %.17g at %ld",
+              ci, s.v, p.v_max, n);
+        CHECK(fabs(s.a) <= lvl * (1 + 1e-9), "case %ld: |a| = %.17g > %.17g at %ld", ci, s.a, lvl,
+              n);
+        /* two ramps of the same sign may overlap (the end of an acceleration and the
+         * start of a deceleration: planned motions allow it too) */
+        CHECK(Nmin == 1000000000 || fabs(s.j) <= (p.a_max + p.d_max) / (Nmin * p.Te) * (1 + 1e-9),
+              "case %ld: |j| = %.17g > %.17g at %ld", ci, s.j,
+              (p.a_max + p.d_max) / (Nmin * p.Te), n);
+        CHECK(s.stage >= 0 && s.stage <= 4 && (s.j == 0.0 || s.stage > 0),
+              "case %ld: stage %d with jerk %g at %ld", ci, (int)s.stage, s.j, n);
+        if (whole && have) {
+            double T = p.Te, xp, vp;
+            xp = prev.x + T * (prev.v + T * (0.5 * prev.a + T * prev.j / 6.0));
+            vp = prev.v + T * (prev.a + 0.5 * T * prev.j);
+            CHECK(fabs(xp - s.x) <= 1e-9 * (scale + fabs(s.x)) && fabs(vp - s.v) <= 1e-9 * p.v_max,
+                  "case %ld: not continuous at %ld: x %.17g vs %.17g, v %.17g vs %.17g", ci, n,
+                  xp, s.x, vp, s.v);
+        }
+        prev = s;
+        have = 1;
+        if (failures > 20) return;
+        if (s.done && ncmd == 0) {
+            if (last_kind == 1) {
+                CHECK(fabs(s.x - target) <= 1e-9 * scale + 4e-16 * fabs(target),
+                      "case %ld: ended at %.17g, target %.17g", ci, s.x, target);
+            }
+            if (last_kind != 0)
+                CHECK(s.v == 0.0 && s.a == 0.0 && s.j == 0.0,
+                      "case %ld: not at rest at the end: v %g a %g j %g", ci, s.v, s.a, s.j);
+            if (++stopped_fixed > 3) break;
+        }
+        CHECK(n < limit, "case %ld: no end after %ld samples", ci, n);
+        if (n >= limit) return;
+    }
+    n_end = n;
+    (void)n_end;
+}
+
+int main(int argc, char **argv)
+{
+    long cases = argc > 1 ? atol(argv[1]) : 2000, c;
+    tally t;
+    memset(&t, 0, sizeof t);
+    if (argc > 2) rng_state ^= strtoull(argv[2], NULL, 10) * 0x9E3779B97F4A7C15ULL;
+    for (c = 0; c < cases && failures <= 20; c++) {
+        if (getenv("TEST_REPLAN_CASE") && c != atol(getenv("TEST_REPLAN_CASE"))) {
+            /* the same random draws, quietly */
+            int f0 = failures;
+            FILE *saved = stderr;
+            stderr = fopen("/dev/null", "w");
+            run_case(&t, c);
+            fclose(stderr);
+            stderr = saved;
+            failures = f0;
+            continue;
+        }
+        run_case(&t, c);
+    }
+    printf("test_replan: %ld motions (%ld skipped), %ld commands (%ld targets, %ld stops; %ld "
+           "stopped first), %ld f_mode changes, %ld f_mode replans (%ld declined: the stage "
+           "kept its jerk time), %ld stage ends clipped to v_max: %d failures\n",
+           t.cases, t.skipped, t.commands, t.targets, t.stops, t.fallbacks, t.fchanges,
+           t.replans_f, t.declined, t.clipped, failures);
+    return failures != 0;
+}

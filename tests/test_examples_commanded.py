@@ -1,0 +1,136 @@
+"""The commanded-FMU examples (issue #12) run, fast and headless; the README's fmpy snippet."""
+
+from __future__ import annotations
+
+import os
+import runpy
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def _in(tmp_path: Path, fn):
+    cwd = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        return fn()
+    finally:
+        os.chdir(cwd)
+
+
+def test_commanded_targets_example(tmp_path, capsys, fmus):
+    from harness.fmu.build import default_fmu
+
+    default_fmu(2)  # the example's FMU, built (once) before the clock starts
+    t0 = time.perf_counter()
+    mod = _in(tmp_path, lambda: runpy.run_path(str(EXAMPLES / "commanded_targets.py"),
+                                               run_name="__main__"))
+    assert time.perf_counter() - t0 < 10.0
+    out = capsys.readouterr().out
+    assert "moves ended (busy falls)" in out
+    assert (tmp_path / "djl-fmu-out" / "commanded_targets.png").stat().st_size > 10_000
+
+    # what it shows: the same simulation, on the FMI 2 and FMI 3 FMUs alike
+    t, v = mod["simulate"](fmu=fmus[2])
+    t3, v3 = mod["simulate"](fmu=fmus[3])
+    for name in ("x", "v", "a", "j", "busy", "stage"):
+        np.testing.assert_array_equal(v[name], v3[name])
+    Te, P = mod["Te"], mod["PARAMS"]
+    assert np.allclose(np.diff(t), Te, rtol=1e-9)
+    busy = v["busy"].astype(bool)
+    ends = np.flatnonzero(busy[:-1] & ~busy[1:]) + 1
+    assert len(ends) == 3  # the 0.3 m order replaced mid-move, the stopped move, the last one
+
+    def k(ts: float) -> int:
+        return int(round(ts / Te))
+
+    # each command's edge acts from the next sample: busy turns true one sample later
+    for t_cmd in (0.05, 0.40, 1.20, 2.00):
+        assert busy[k(t_cmd) + 1]
+    assert not busy[k(0.05)] and not busy[k(1.20)] and not busy[k(2.00)]
+    # the moves end on their targets at rest: 0.1 m (the second order), then -0.05 m
+    for kk, target in ((ends[0], 0.10), (ends[2], -0.05)):
+        assert abs(v["x"][kk] - target) <= 1e-9 * 0.45
+        assert v["v"][kk] == 0.0 and v["a"][kk] == 0.0
+    # the stop: at rest short of the 0.45 m target, further than where the stop came
+    x_stop = v["x"][ends[1]]
+    assert v["x"][k(1.45)] < x_stop < 0.45 and v["v"][ends[1]] == 0.0
+    assert np.all(v["x"][ends[1]:k(2.0) + 1] == x_stop)
+    # limits
+    assert np.max(np.abs(v["v"])) <= P["v_max"] * (1 + 1e-12)
+    assert np.max(np.abs(v["a"])) <= max(P["a_max"], P["d_max"]) * (1 + 1e-12)
+    # stage: 0 at rest, 1..4 while moving
+    assert np.all(v["stage"][~busy] == 0) and set(np.unique(v["stage"])) <= {0, 1, 2, 3, 4}
+
+
+def test_online_fmode_example(tmp_path, capsys):
+    from harness.fmu.build import default_fmu
+
+    default_fmu(2)
+    t0 = time.perf_counter()
+    _in(tmp_path, lambda: runpy.run_path(str(EXAMPLES / "online_fmode.py"), run_name="__main__"))
+    assert time.perf_counter() - t0 < 10.0
+    out = capsys.readouterr().out
+    assert "DJL-online" in out and "round(1/(f Te))" in out
+    assert (tmp_path / "djl-fmu-out" / "online_fmode.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("v", [2, 3], ids=["fmi2", "fmi3"])
+def test_readme_fmpy_snippet(tmp_path, fmus, v, capsys):
+    """The code given for the README (commands as an fmpy input table), on both FMUs."""
+    import shutil
+
+    shutil.copy(fmus[v], tmp_path / "JerkLimitedTrajectory.fmu")
+
+    def snippet():
+        # --- as in the README ---------------------------------------------------------
+        import numpy as np
+        from fmpy import simulate_fmu
+
+        # the commands, as a table: go to 0.3 m at 0.1 s; at 0.5 s, still moving, to 0.1 m
+        # instead; at 1.2 s to 0.4 m, stopped on the way at 1.4 s (a command is a rising
+        # edge: False in between)
+        signals = np.array([
+            # time  target  execute  stop
+            (0.0,   0.0,    False,   False),
+            (0.1,   0.3,    True,    False),
+            (0.2,   0.3,    False,   False),
+            (0.5,   0.1,    True,    False),
+            (0.6,   0.1,    False,   False),
+            (1.2,   0.4,    True,    False),
+            (1.3,   0.4,    False,   False),
+            (1.4,   0.4,    False,   True),
+        ], dtype=[("time", float), ("target", float), ("execute", bool), ("stop", bool)])
+
+        res = simulate_fmu("JerkLimitedTrajectory.fmu", stop_time=2.0, output_interval=1e-3,
+                           start_values={"distance": 0.0, "v_max": 0.5, "a_max": 4.0,
+                                         "d_max": 4.0},
+                           input=signals, output=["x", "v", "a", "busy", "stage"])
+        ends = np.flatnonzero(res["busy"][:-1] & ~res["busy"][1:]) + 1  # where each move rests
+        print(res["time"][ends], res["x"][ends])  # [1.062 1.586] [0.1 0.197...]
+        # ---------------------------------------------------------------------------------
+        return res, ends
+
+    res, ends = _in(tmp_path, snippet)
+    capsys.readouterr()
+    # what the snippet prints (a command read at t acts from the next sample, t + 1 ms)
+    np.testing.assert_allclose(res["time"][ends], [1.062, 1.586], rtol=0, atol=1e-9)
+    assert res["x"][ends[1]] == pytest.approx(0.197214, abs=1e-6)
+    t, x, vel = res["time"], res["x"], res["v"]
+    assert np.allclose(np.diff(t), 1e-3, rtol=1e-9)
+    # the first execute, read at the doStep from 0.1 s: the outputs at 0.1 s are those of
+    # the axis at rest, the move starts at the next sample (busy; its jerk ramp from there)
+    k01 = int(np.argmin(np.abs(t - 0.1)))
+    assert not res["busy"][k01] and res["busy"][k01 + 1]
+    assert res["a"][k01] == 0.0 and res["a"][k01 + 1] == 0.0 and res["a"][k01 + 2] > 0.0
+    assert abs(x[ends[0]] - 0.1) <= 1e-9 * 0.3 and vel[ends[0]] == 0.0
+    # the first order (0.3 m) was replaced before it was reached
+    assert x[int(np.argmin(np.abs(t - 0.5)))] < 0.3 and x.max() < 0.3
+    # the stop: at rest, short of 0.4 m, past where it was at the stop, until the end
+    k14 = int(np.argmin(np.abs(t - 1.4)))
+    assert x[k14] < x[ends[1]] < 0.4 and np.all(x[ends[1]:] == x[ends[1]])
+    assert np.all(vel[ends[1]:] == 0.0) and not res["busy"][-1]
