@@ -4,7 +4,7 @@
 #define DJL_VARS_H
 
 #define DJL_MODEL_IDENTIFIER "JerkLimitedTrajectory"
-#define DJL_INSTANTIATION_TOKEN "{62cd93d6-3202-5f21-80fb-90de83e877fb}"
+#define DJL_INSTANTIATION_TOKEN "{17a40c1a-f0fa-5aba-a3fa-f34554b792b3}"
 #define DJL_VARS_MAX_SEGMENTS 32
 
 /* value references (arrays: first element; element i at base + i) */

@@ -334,25 +334,26 @@ static model_status ensure_plan(model_instance *m, const char *fn)
     if (!djl_isfinite(d->t_start))
         return model_fail(m, "%s: invalid parameter t_start = %g s: must be finite", fn,
                           d->t_start);
-    if (d->jerk_source != 1 && d->jerk_source != 2)
+    if (d->jerk_source < 1 || d->jerk_source > 3)
         return model_fail(m, "%s: invalid parameter jerk_source = %d: must be 1 (the jerk times "
-                          "T_F1..T_F4) or 2 (from the input f_mode)", fn, (int)d->jerk_source);
-    if (d->jerk_source == 2) {
+                          "T_F1..T_F4), 2 (from the input f_mode) or 3 (from f_mode "
+                          "extrapolated to each stage's start)", fn, (int)d->jerk_source);
+    if (d->jerk_source >= 2) {
         int32_t Nf = jerk_samples(d->f_mode, d->p.Te);
         int i;
         if (d->p.profile == DJL_PROFILE_AL)
-            return model_fail(m, "%s: invalid parameter jerk_source = 2 with profile = 1 (AL): an "
-                              "AL profile has no jerk time to take from f_mode; use profile 2 "
-                              "or 3", fn);
+            return model_fail(m, "%s: invalid parameter jerk_source = %d with profile = 1 (AL): "
+                              "an AL profile has no jerk time to take from f_mode; use profile "
+                              "2 or 3", fn, (int)d->jerk_source);
         if (d->p.n_segments != 0 || d->p.v_e != 0.0)
-            return model_fail(m, "%s: invalid parameter jerk_source = 2 with n_segments = %d and "
+            return model_fail(m, "%s: invalid parameter jerk_source = %d with n_segments = %d and "
                               "v_e = %g m/s: jerk times from f_mode are applied to single moves "
                               "ending at rest (n_segments = 0, v_e = 0)", fn,
-                              (int)d->p.n_segments, d->p.v_e);
+                              (int)d->jerk_source, (int)d->p.n_segments, d->p.v_e);
         if (Nf == 0)
-            return model_fail(m, "%s: invalid input f_mode = %g Hz: with jerk_source = 2 its "
+            return model_fail(m, "%s: invalid input f_mode = %g Hz: with jerk_source = %d its "
                               "period must be between Te/2 and %d samples of Te = %g s", fn,
-                              d->f_mode, DJL_MAX_FILTER_SAMPLES, d->p.Te);
+                              d->f_mode, (int)d->jerk_source, DJL_MAX_FILTER_SAMPLES, d->p.Te);
         if (djl_validate(&q, &err) != DJL_OK)
             return model_fail(m, "%s: %s: %s", fn, djl_status_name(DJL_E_PARAM), err.message);
         q.profile = DJL_PROFILE_DJL;
@@ -412,7 +413,7 @@ static model_status set_input(model_instance *m, const model_var *v, double valu
         if (!(djl_isfinite(value) && value > 0.0))
             return model_refuse(m, "set: invalid input f_mode = %g Hz: must be a finite frequency "
                                 "> 0 (the previous value, %g Hz, is kept)", value, d->f_mode);
-        if (d->jerk_source == 2 && (d->state & MS_STEP) && jerk_samples(value, d->p.Te) == 0)
+        if (d->jerk_source >= 2 && (d->state & MS_STEP) && jerk_samples(value, d->p.Te) == 0)
             return model_refuse(m, "set: invalid input f_mode = %g Hz: its period, %g s, is "
                                 "outside [Te/2, %d Te] at Te = %g s (the previous value, %g Hz, "
                                 "is kept)", value, 1.0 / value, DJL_MAX_FILTER_SAMPLES, d->p.Te,
@@ -579,6 +580,9 @@ model_status model_exit_init(model_instance *m)
     if (st != ST_OK) return st;
     m->d.execute_seen = m->d.execute; /* edges are counted from here */
     m->d.stop_seen = m->d.stop;
+    m->d.f_seen = m->d.f_mode; /* and f_mode's rate of change (jerk_source = 3) */
+    m->d.t_seen = m->d.t_now;
+    m->d.f_rate = 0.0;
     m->d.state = MS_STEP;
     return ST_OK;
 }
@@ -632,6 +636,29 @@ static model_status replan_at(model_instance *m, double t, double u, const djl_g
     return ST_OK;
 }
 
+/* jerk_source = 3: each stage's jerk time from f_mode extrapolated (at its rate of
+ * change over the last step) to the next sample at which the plan starts that stage;
+ * f_mode itself for a stage the plan does not start again. */
+static void predicted_jerk_times(const model_data *d, double u0, int32_t N[4])
+{
+    const djl_plan *pl = &d->plan;
+    double next[4] = {-1.0, -1.0, -1.0, -1.0}, b = djl_floor(u0) + 1.0;
+    int i;
+    for (i = 0; i < pl->n_steps; i++) {
+        const djl_step *st = &pl->step[i];
+        double tau = (double)st->tau;
+        if (st->stage >= 1 && st->stage <= 4 && tau >= b &&
+            (next[st->stage - 1] < 0.0 || tau < next[st->stage - 1]))
+            next[st->stage - 1] = tau;
+    }
+    for (i = 0; i < 4; i++) {
+        double f = next[i] < 0.0 ? d->f_mode
+                                 : d->f_mode + d->f_rate * ((next[i] - u0) * d->p.Te);
+        int32_t n = jerk_samples(f, d->p.Te);
+        if (n > 0) N[i] = n; /* else f_mode's own (an extrapolation out of range) */
+    }
+}
+
 /* The commands read at a DoStep (t, plan time u0, the step covering du samples):
  * edges of stop and execute, then with jerk_source = 2 the jerk times of the
  * stages that start within the step from f_mode. */
@@ -643,14 +670,22 @@ static model_status commands(model_instance *m, double t, double u0, double du)
     djl_goal g;
     int i, it, now;
     memset(&g, 0, sizeof g);
-    if (d->jerk_source == 2) {
+    if (d->jerk_source >= 2) {
         int32_t Nf = jerk_samples(d->f_mode, d->p.Te);
         if (Nf == 0)
             return model_refuse(m, "DoStep at t = %.17g s: invalid input f_mode = %g Hz: with "
-                                "jerk_source = 2 its period must be between Te/2 and %d samples "
-                                "of Te = %g s (nothing was done)", t, d->f_mode,
-                                DJL_MAX_FILTER_SAMPLES, d->p.Te);
+                                "jerk_source = %d its period must be between Te/2 and %d "
+                                "samples of Te = %g s (nothing was done)", t, d->f_mode,
+                                (int)d->jerk_source, DJL_MAX_FILTER_SAMPLES, d->p.Te);
         for (i = 0; i < 4; i++) g.N[i] = Nf;
+        if (d->jerk_source == 3) {
+            /* f_mode's rate of change over the last step, then each stage's jerk time
+             * from f_mode extrapolated to where the plan starts it */
+            if (t > d->t_seen) d->f_rate = (d->f_mode - d->f_seen) / (t - d->t_seen);
+            d->f_seen = d->f_mode;
+            d->t_seen = t;
+            predicted_jerk_times(d, u0, g.N);
+        }
     } else {
         memcpy(g.N, d->first.N, sizeof g.N);
     }
@@ -667,7 +702,7 @@ static model_status commands(model_instance *m, double t, double u0, double du)
     }
     d->stop_seen = d->stop;
     d->execute_seen = d->execute;
-    if (d->jerk_source != 2) return ST_OK;
+    if (d->jerk_source < 2) return ST_OK;
     /* jerk times from f_mode: a stage that starts within the step with another jerk
      * time is replanned as it starts; while cruising or speeding up, the stages to
      * come are replanned at once (a stop or the landing then falls on the right
@@ -688,10 +723,14 @@ static model_status commands(model_instance *m, double t, double u0, double du)
         st = djl_replan(&d->plan, at, &g, &d->plan, &m->scratch, &info, &err);
         if (st == DJL_E_INFEASIBLE) {
             /* the jerk time of f_mode no longer lands from here without stopping and
-             * coming back: the stage keeps the one it was planned with */
-            model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
-                      "t = %.17g s: f_mode = %g Hz: the stage starting at sample %.17g keeps "
-                      "its planned jerk time (%s)", t, d->f_mode, at, err.message);
+             * coming back: the stage keeps the one it was planned with (a replan ahead
+             * of the stage, at now, is only not made) */
+            if (!now)
+                model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
+                          "t = %.17g s: f_mode = %g Hz: the stage starting at t = %.17g s "
+                          "keeps its planned jerk time (%s)", t, d->f_mode,
+                          d->start_time + (d->offset + djl_floor(at) + 1.0) * d->p.Te,
+                          err.message);
             from = djl_floor(at) + 1.0; /* past the stage that keeps its jerk time */
             now = 0;
             continue;
@@ -748,7 +787,7 @@ model_status model_do_step(model_instance *m, double t, double h)
     if (!(whole + (double)d->n + phase <= (double)DJL_MAX_MOTION_SAMPLES))
         return model_fail(m, "DoStep: communication step %g s takes the FMU past %g samples of "
                           "Te = %g s", h, (double)DJL_MAX_MOTION_SAMPLES, d->p.Te);
-    if (d->execute != d->execute_seen || d->stop != d->stop_seen || d->jerk_source == 2) {
+    if (d->execute != d->execute_seen || d->stop != d->stop_seen || d->jerk_source >= 2) {
         model_status st = commands(m, t, (double)d->n - d->offset + d->phase,
                                    whole + phase - d->phase);
         if (st != ST_OK) return st;
@@ -836,7 +875,9 @@ static const char *state_flaw(const model_data *d, char *why, size_t nwhy)
     if (!djl_isfinite(d->t_now)) return "the communication time is not finite";
     if ((d->state & (MS_STEP | MS_TERMINATED)) && !d->planned)
         return "a state after initialization without a plan";
-    if (d->jerk_source != 1 && d->jerk_source != 2) return "jerk_source is neither 1 nor 2";
+    if (d->jerk_source < 1 || d->jerk_source > 3) return "jerk_source is not 1, 2 or 3";
+    if (!djl_isfinite(d->f_seen) || !djl_isfinite(d->t_seen) || !djl_isfinite(d->f_rate))
+        return "f_mode's rate of change is not finite";
     if ((d->execute | d->stop | d->execute_seen | d->stop_seen) & ~1)
         return "a Boolean input is neither 0 nor 1";
     if (!(djl_isfinite(d->target) && djl_fabs(d->target) <= DJL_MAX_POSITION))
@@ -859,7 +900,7 @@ static const char *state_flaw(const model_data *d, char *why, size_t nwhy)
     if (pl->replanned != 0 && pl->replanned != 1) return "the replanned flag is neither 0 nor 1";
     if (!pl->replanned && d->jerk_source == 1 && !same_params(&d->p, &pl->p))
         return "its plan was not made from its parameters";
-    if (pl->replanned || d->jerk_source == 2) {
+    if (pl->replanned || d->jerk_source >= 2) {
         /* a plan of its own (a replan, or jerk times from f_mode): sound values */
         double v[7];
         v[0] = pl->p.Te; v[1] = pl->p.x0; v[2] = pl->p.v0; v[3] = pl->p.v_max;

@@ -63,13 +63,16 @@ typedef struct {
     djl_plan plan;
     djl_sample out;         /* outputs at the current time */
     /* commanded generator (docs/generator.md, "Commanded moves") */
-    int32_t jerk_source;    /* parameter: 1 jerk times T_F1..T_F4, 2 from the input f_mode */
+    int32_t jerk_source;    /* parameter: 1 jerk times T_F1..T_F4, 2 from the input f_mode,
+                               3 from f_mode extrapolated to each stage's start */
     int32_t execute, stop;  /* Boolean inputs, 0 or 1 */
     int32_t execute_seen, stop_seen; /* their values at the previous DoStep (edges) */
     int32_t goal;           /* 0 the parametric move; DJL_GOAL_TARGET; DJL_GOAL_STOP */
     double target;          /* m, input */
     double f_mode;          /* Hz, input */
     double goal_target;     /* m, target of the commanded move in progress */
+    double f_seen, t_seen;  /* f_mode at the previous DoStep and its time (jerk_source = 3) */
+    double f_rate;          /* Hz/s, f_mode's rate of change over the last step */
     int64_t replans;        /* replans made (logs) */
     plan_summary first;
 } model_data;

@@ -76,7 +76,7 @@ def test_model_description_declares_capabilities(fmus, version):
              for t in md.typeDefinitions if t.type == "Enumeration"}
     assert items == {"Profile": [("AL", 1), ("JL", 2), ("DJL", 3)],
                      "ShortStage": [("stretch", 1), ("overlap", 2)],
-                     "JerkSource": [("parameters", 1), ("f_mode", 2)]}
+                     "JerkSource": [("parameters", 1), ("f_mode", 2), ("f_mode_ahead", 3)]}
     assert by["profile"].declaredType.name == "Profile"
     display = {u.name: {d.name: d.factor for d in u.displayUnits} for u in md.unitDefinitions}
     quantity = {"m": ("Position", "mm"), "m/s": ("Velocity", "mm/s"),

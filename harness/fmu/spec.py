@@ -85,6 +85,9 @@ ENUMERATIONS: dict[str, tuple[tuple[str, int, str], ...]] = {
         ("parameters", 1, "the jerk times T_F1..T_F4 (JL: T_F1)"),
         ("f_mode", 2, "each stage's jerk time is the period 1/f_mode read when the stage "
                       "starts (the paper's rule, applied online)"),
+        ("f_mode_ahead", 3, "as f_mode, with f_mode extrapolated at its rate of change to "
+                            "the stages still to come, so that the deceleration is placed "
+                            "for the jerk times it will have"),
     ),
 }
 """Enumeration types: items (name, value, description).  FMI 2 sets them with
@@ -229,8 +232,9 @@ VARIABLES: tuple[Variable, ...] = (
        min=0, max=4),
     _p("jerk_source", 24, "Enumeration", 1, "Jerk times: 1 = the parameters T_F1..T_F4; 2 = "
        "from the input f_mode, each constant-jerk stage's jerk time being round(1/(f_mode Te)) "
-       "samples read when the stage starts (JL or DJL, n_segments = 0, v_e = 0)", min=1, max=2,
-       declared_type="JerkSource"),
+       "samples read when the stage starts; 3 = the same with f_mode extrapolated at its rate "
+       "of change to the stages still to come (JL or DJL, n_segments = 0, v_e = 0)", min=1,
+       max=3, declared_type="JerkSource"),
     _i("target", 50, "Real", 0.0, "Target position of the next execute command (absolute)", "m",
        min=-MAX_POSITION, max=MAX_POSITION),
     _i("execute", 51, "Boolean", False, "Rising edge: move from the current state (any velocity "

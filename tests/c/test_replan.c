@@ -162,7 +162,7 @@ static void run_case(tally *t, long ci)
                 bound = v / p.d_max + (g.kind == DJL_GOAL_STOP ? 0.0
                         : (fabs(g.target - before.x) + v * v / (2 * p.d_max)) / p.v_max +
                           p.v_max / p.a_max + p.v_max / p.d_max);
-                bound = 2.0 * (bound / p.Te + 6.0 * (Nx + 1.0)) + 10.0;
+                bound = 2.0 * (bound / p.Te + 6.0 * (Nx + 1.0)) + 50.0; /* + whole samples */
                 CHECK(plan.k_end <= bound, "case %ld: a command at %ld makes a motion of %lld "
                       "samples, more than %g", ci, n, (long long)plan.k_end, bound);
             }
@@ -175,6 +175,7 @@ static void run_case(tally *t, long ci)
             if (urand() < 0.3) {
                 f *= exp((urand() - 0.5) * 0.6);
                 if (urand() < 0.02) f = 1.0 / (p.Te * (1.0 + irand(60))); /* a jump */
+                f = fmin(fmax(f, 1.0 / (200.0 * p.Te)), 1.0 / p.Te); /* periods of 1..200 Te */
                 Nf = N_of(f, p.Te);
                 if (Nf < Nmin) Nmin = Nf;
                 t->fchanges++;
