@@ -723,9 +723,12 @@ static model_status commands(model_instance *m, double t, double u0, double du)
         st = djl_replan(&d->plan, at, &g, &d->plan, &m->scratch, &info, &err);
         if (st == DJL_E_INFEASIBLE) {
             /* the jerk time of f_mode no longer lands from here without stopping and
-             * coming back: the stage keeps the one it was planned with (a replan ahead
-             * of the stage, at now, is only not made) */
-            if (!now)
+             * coming back: the stage keeps the one it was planned with */
+            int k, starts = 0; /* a stage starts at the sample after at (else a replan
+                                   ahead of it, at now, was only not made) */
+            for (k = 0; k < d->plan.n_steps; k++)
+                starts |= (double)d->plan.step[k].tau == djl_floor(at) + 1.0;
+            if (starts)
                 model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
                           "t = %.17g s: f_mode = %g Hz: the stage starting at t = %.17g s "
                           "keeps its planned jerk time (%s)", t, d->f_mode,

@@ -12,52 +12,66 @@ if TYPE_CHECKING:
     from ._outputs import OutputSet
 
 DESCRIPTION = """\
-Co-simulate the commanded generator FMU (issue #12) with jerk_source = 2: each
-constant-jerk stage's jerk time is round(1/(f_mode Te)) samples, f_mode read
-at the step that ends where the stage starts. The master sets f_mode at every
-communication step to the tuned mode's frequency at the Z generator's current
-position (the mode map of the scenario): the paper's DJL rule (the modal period
-at the start of each stage) applied online, inside the co-simulation, with no
-tuning beforehand. A stage whose jerk time from f_mode would no longer land the
-move without moving back keeps the one it was planned with (the FMU logs it;
-marked "kept").
+Co-simulate the commanded generator FMU (issue #12) with its jerk times taken
+from the input f_mode. The master sets f_mode at every communication step to
+the tuned mode's frequency at the Z generator's current position (the mode map
+of the scenario): the paper's DJL rule (the modal period at the start of each
+stage) applied online, inside the co-simulation, with no tuning beforehand.
+The FMU parameter jerk_source (--jerk-source) says how:
+
+  3 (f_mode_ahead, default): each stage still to come takes round(1/(f Te))
+    samples, f = f_mode extrapolated at its rate over the last step to the
+    sample where the plan starts the stage, so the deceleration is placed for
+    the jerk times it will have;
+  2 (f_mode): each constant-jerk stage's jerk time is round(1/(f_mode Te))
+    samples, f_mode read at the step that ends where the stage starts; the
+    deceleration is placed for the jerk times of the moment.
+
+With either, a stage whose jerk time from f_mode would no longer land the move
+without moving back keeps the one it was planned with (the FMU logs it; marked
+"kept"). --jerk-source both runs the two, side by side.
 
 It runs next to the offline-tuned DJL of the same scenario (the paper's rule
 iterated on the planned move, or --offline DJL-optimal / DJL-robust) through
 the same plant and the same Z move (synchronised with the offline DJL move),
-and prints, for both: the jerk times applied per stage, the residual vibration
+and prints, for all: the jerk times applied per stage, the residual vibration
 (free-oscillation amplitude when the reference ends), the motion time and the
-settling time in the scenario's band; and, for the online run, where each stage
-started (the FMU's stage output), z and f_mode where its f_mode was read,
-round(1/(f_mode Te)), the samples its ramp of constant jerk lasted (the j
-output) and whether it kept its planned jerk time.
+settling time in the scenario's band; and, for each online run, where each
+stage started (the FMU's stage output), z and f_mode where its f_mode was
+read, the rule's frequency f for the jerk source (for 3: extrapolated, with
+the rate), round(1/(f Te)), the samples its ramp of constant jerk lasted (the
+j output) and whether it kept its planned jerk time.
 
 SCENARIO is a single-move TOML file (format: docs/harness.md) or an embedded
 scenario name; default X. The FMU engine only (the FMU is stepped with its
-input set at every step); about 1 s a scenario.
+input set at every step); about 1 s a scenario and jerk source.
 
 Outputs, in --out (default ./djl-fmu-out/online), written only once every run
 has succeeded:
-  <name>-online.csv   one row per run (profile, jerk times in samples, residual,
-                      motion and settling time, end position error), then one row
-                      per online stage (start, where f_mode was read, z, f_mode,
-                      N rule, N applied, kept)
+  <name>-online.csv   one row per run (profile, jerk_source, jerk times in
+                      samples, residual, motion and settling time, end position
+                      error), then one row per online stage (jerk_source,
+                      start, where f_mode was read, z, f_mode, rate, the rule's
+                      f, N rule, N applied, kept)
   <name>-online.png   x, v, a, j of both; the stage output and f_mode; the
-                      deflection; z(t)
+                      deflection; z(t) (with --jerk-source both:
+                      <name>-online-js2.png and <name>-online-js3.png)
   summary.txt         the tables printed on screen
 """
 
 EPILOG = """\
 examples:
-  djl-fmu online                       scenario X
+  djl-fmu online                       scenario X, jerk_source = 3
+  djl-fmu online X Y --jerk-source both
+                                       offline DJL, online 2 and online 3 side by side
   djl-fmu online X Y --fmi-version 3   both Table 1 moves on the FMI 3.0 FMU
   djl-fmu online Y --offline DJL-optimal
                                        against DJL tuned on the model (docs/tuning.md)
   djl-fmu online my_axis.toml --fmu my_generator.fmu
 
 Exit status: 0 on success, 2 for a bad scenario or option or an FMU without the
-commanded interface (nothing run, nothing written), 1 if a run fails or a result
-is not finite (nothing written).
+commanded interface or the jerk source (nothing run, nothing written), 1 if a
+run fails or a result is not finite (nothing written).
 """
 
 ONLINE_FINITE = ("residual_m", "residual_peak_m", "motion_time_s", "end_error_m")
@@ -89,6 +103,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--offline", default="DJL", metavar="PROFILE",
                    help="offline profile compared: DJL (the scenario's DJL tuning, the paper's "
                         "rule by default), DJL-paper, DJL-optimal or DJL-robust")
+    p.add_argument("--jerk-source", choices=("3", "2", "both"), default="3",
+                   help="the FMU's jerk_source online: 3 (f_mode_ahead, f_mode extrapolated to "
+                        "each stage's start; default), 2 (f_mode as read) or both side by side")
     p.add_argument("--no-plot", action="store_true", help="do not write the PNG figures")
     p.add_argument("-q", "--quiet", action="store_true", help="do not print the tables")
     p.set_defaults(func=interruptible(run))
@@ -98,8 +115,9 @@ def run(args: argparse.Namespace) -> int:
     """Check the scenarios, run them, then write the outputs; return the exit status."""
     import math
 
+    from ..cosim import Session
     from ..fmu.runner import FMUError
-    from ..online import COMMANDED_VARIABLES, run_online
+    from ..online import COMMANDED_VARIABLES, format_online, online_rows, run_online
     from ..optimize import DJL_METHODS
     from ._common import (
         CommandError,
@@ -115,6 +133,7 @@ def run(args: argparse.Namespace) -> int:
     allowed = ["DJL"] + [f"DJL-{m}" for m in DJL_METHODS]
     if args.offline not in allowed:
         raise CommandError(2, f"--offline {args.offline!r}: choose from {', '.join(allowed)}")
+    sources = (2, 3) if args.jerk_source == "both" else (int(args.jerk_source),)
     for sc in scenarios:
         if sc.is_sweep:
             raise CommandError(2, f"{sc.name}: a sweep; the online co-simulation runs single "
@@ -131,30 +150,46 @@ def run(args: argparse.Namespace) -> int:
             if lacking:
                 raise CommandError(2, f"{fmu}: not a commanded generator FMU (issue #12): no "
                                       f"{', '.join(lacking)}")
+            values = fmu_jerk_sources(fmu)
+            if values is not None and not set(sources) <= values:
+                raise CommandError(2, f"{fmu}: no jerk_source = "
+                                      f"{', '.join(str(v) for v in sources if v not in values)} "
+                                      f"(it allows {', '.join(str(v) for v in sorted(values))})")
 
     # 2. run (nothing is written yet)
     import matplotlib
 
     matplotlib.use("Agg")
-    results = []
+    results = []  # per scenario: one result per jerk source
     for sc in scenarios:
+        runs = []
         try:
-            res = run_online(sc, step=args.step, offline=args.offline)
+            session = Session(sc.simulation.fmu, sc.simulation.fmi_version, engine="fmu")
+            try:
+                for js in sources:
+                    runs.append(run_online(sc, step=args.step, offline=args.offline,
+                                           session=session, jerk_source=js))
+            finally:
+                session.close()
         except (FMUError, RuntimeError, ValueError) as e:
             raise CommandError(1, f"online co-simulation failed ({sc.name}): {e}") from None
-        check_rows_finite(res.rows()[:2], f"online co-simulation failed ({sc.name})",
-                          finite=ONLINE_FINITE, keys=("profile",))
-        results.append(res)
-    summary = "\n\n".join(r.table() for r in results)
+        check_rows_finite([r for r in online_rows(runs) if r["row"] == "run"],
+                          f"online co-simulation failed ({sc.name})",
+                          finite=ONLINE_FINITE, keys=("profile", "jerk_source"))
+        results.append(runs)
+    summary = "\n\n".join(format_online(runs) for runs in results)
 
     # 3. write everything, or nothing
     from ..results import save_figure, write_csv
 
     def write(o: OutputSet) -> None:
-        for stem, r in zip(stems, results, strict=True):
-            write_csv(o.path(f"{stem}-online.csv"), r.rows())
-            if not args.no_plot:
-                save_figure(r.plot(), o.path(f"{stem}-online.png"))
+        for stem, runs in zip(stems, results, strict=True):
+            write_csv(o.path(f"{stem}-online.csv"), online_rows(runs))
+            if args.no_plot:
+                continue
+            for r in runs:
+                suffix = f"-js{r.jerk_source}" if len(runs) > 1 else ""
+                save_figure(r.plot(), o.path(f"{stem}-online{suffix}.png"))
 
     written = write_outputs(args.out, write, summary)
     report_written(args.out, written, summary, args.quiet)
@@ -169,3 +204,12 @@ def fmu_variable_names(path: Path) -> set[str]:
 
     check_fmu_archive(path)
     return {v.name for v in read_model_description(str(path)).modelVariables}
+
+
+def fmu_jerk_sources(path: Path) -> set[int] | None:
+    """Values an FMU file allows for ``jerk_source`` (None if it does not say)."""
+    from fmpy import read_model_description
+
+    from ..online import jerk_source_values
+
+    return jerk_source_values(read_model_description(str(path)))

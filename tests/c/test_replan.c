@@ -156,9 +156,11 @@ static void run_case(tally *t, long ci)
             {
                 /* no slower than stopping at d_max, then moving at the limits (each with
                  * its jerk times), twice over */
-                double v = fabs(before.v), Nx = 0.0, bound;
+                double v, Nx = 0.0, bound;
                 for (i = 0; i < 4; i++) Nx = fmax(Nx, fmax(g.N[i], plan.N[i]));
                 for (i = 0; i < plan.n_steps; i++) Nx = fmax(Nx, plan.step[i].N); /* kept */
+                /* the speed the ramps running may still bring */
+                v = fmin(p.v_max, fabs(before.v) + lvl * (Nx + 2.0) * p.Te);
                 bound = v / p.d_max + (g.kind == DJL_GOAL_STOP ? 0.0
                         : (fabs(g.target - before.x) + v * v / (2 * p.d_max)) / p.v_max +
                           p.v_max / p.a_max + p.v_max / p.d_max);
