@@ -350,10 +350,11 @@ static model_status ensure_plan(model_instance *m, const char *fn)
                               "v_e = %g m/s: jerk times from f_mode are applied to single moves "
                               "ending at rest (n_segments = 0, v_e = 0)", fn,
                               (int)d->jerk_source, (int)d->p.n_segments, d->p.v_e);
-        if (Nf == 0)
-            return model_fail(m, "%s: invalid input f_mode = %g Hz: with jerk_source = %d its "
-                              "period must be between Te/2 and %d samples of Te = %g s", fn,
-                              d->f_mode, (int)d->jerk_source, DJL_MAX_FILTER_SAMPLES, d->p.Te);
+        if (Nf == 0) /* an input, not a parameter: refused, the instance stays usable */
+            return model_refuse(m, "%s: invalid input f_mode = %g Hz: with jerk_source = %d its "
+                                "period must be between Te/2 and %d samples of Te = %g s (set "
+                                "another f_mode)", fn, d->f_mode, (int)d->jerk_source,
+                                DJL_MAX_FILTER_SAMPLES, d->p.Te);
         if (djl_validate(&q, &err) != DJL_OK)
             return model_fail(m, "%s: %s: %s", fn, djl_status_name(DJL_E_PARAM), err.message);
         q.profile = DJL_PROFILE_DJL;
