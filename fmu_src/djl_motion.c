@@ -425,13 +425,11 @@ static djl_status walk_pieces(const motion_work *w, djl_plan *plan, const djl_pa
                 pc->stage = sq->stage; /* steps are in time order: the last started */
             }
         }
-        if (jerk == 0.0) pc->stage = 0; /* ramps whose jerks cancel: no stage in progress */
         if (quiet) a = level;
         if (quiet && level == 0.0) v = vsnap;
         if (exact && !(quiet && level == 0.0)) {
             exact_state(w, b, p->v0, p->Te, &a, &v);
-            if (jerk == 0.0) pc->stage = 0; /* ramps whose jerks cancel: no stage in progress */
-        if (quiet) a = level;
+            if (quiet) a = level;
         }
         if (level == 0.0) val = vsnap;
         if (b >= plan->k_end) {

@@ -383,7 +383,7 @@ static int walk(const replan_state *r, const djl_step *nw, int n_new, int64_t T,
             pc->v_al = val;
             pc->a_al = level;
             pc->seg = 1;
-            pc->stage = jerk == 0.0 ? 0 : stage; /* jerks that cancel: no stage in progress */
+            pc->stage = stage;
         }
         np++;
         L = (double)(bnd[i + 1] - k) * r->Te;
