@@ -637,6 +637,38 @@ static model_status replan_at(model_instance *m, double t, double u, const djl_g
     return ST_OK;
 }
 
+/* A stop while the move in progress only slows down to rest (no step ahead but
+ * stages 3 and 4, ending at rest): the move is kept if it rests no later than the
+ * stop would (the stop ends the deceleration at once, with a ramp that may not end
+ * before stage 3's, and can rest past the move's target).  1 if kept. */
+static int stop_kept(model_instance *m, double t, double u0, djl_goal *g)
+{
+    model_data *d = &m->d;
+    const djl_plan *pl = &d->plan;
+    djl_replan_info info;
+    djl_error err;
+    double b = djl_floor(u0) + 1.0;
+    int i, ahead = 0;
+    if (pl->v_target != 0.0 || (double)pl->k_end <= b) return 0;
+    for (i = 0; i < pl->n_steps; i++) {
+        const djl_step *st = &pl->step[i];
+        if ((double)st->tau >= b) {
+            if (st->stage != 3 && st->stage != 4) return 0;
+            ahead = 1;
+        }
+    }
+    if (!ahead) return 0;
+    g->kind = DJL_GOAL_STOP;
+    /* the stop, planned aside (a stop uses no work space of its own) */
+    if (djl_replan(pl, u0, g, &m->scratch, &m->scratch, &info, &err) != DJL_OK) return 0;
+    if ((double)m->scratch.k_end + (double)info.origin < (double)pl->k_end) return 0;
+    model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
+              "t = %.17g s: stop: the move in progress already slows down to rest, and no "
+              "later than a stop would (at %.17g s): it is kept", t,
+              d->start_time + (d->offset + (double)pl->k_end) * d->p.Te);
+    return 1;
+}
+
 /* jerk_source = 3: each stage's jerk time from f_mode extrapolated (at its rate of
  * change over the last step) to the next sample at which the plan starts that stage;
  * f_mode itself for a stage the plan does not start again. */
@@ -690,7 +722,10 @@ static model_status commands(model_instance *m, double t, double u0, double du)
     } else {
         memcpy(g.N, d->first.N, sizeof g.N);
     }
-    if (stop_edge || exec_edge) {
+    if (stop_edge && stop_kept(m, t, u0, &g)) {
+        d->goal = DJL_GOAL_STOP;
+        d->goal_target = d->target;
+    } else if (stop_edge || exec_edge) {
         model_status st;
         g.kind = stop_edge ? DJL_GOAL_STOP : DJL_GOAL_TARGET;
         g.target = d->target;

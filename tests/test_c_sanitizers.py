@@ -38,7 +38,7 @@ PROGRAMS = {
     "test_math": (["test_math.c"], [], ["100000", "7"]),
     # commanded moves (issue #12): 400 random motions, each with up to 6 commands (new
     # targets, stops) and, in a third of them, jerk times from a changing f_mode; the
-    # campaign of docs/generator.md runs `test_replan 100000` at -O2
+    # campaign of docs/generator.md runs `test_replan 20000 5` at -O2
     "test_replan": (["test_replan.c"], list(CORE), ["400", "7"]),
     # the same plans with djl_math.h and with libm: 3*10^4 random cases
     "test_plan_libm": (["test_plan_libm.c", "core_libm.c"], list(CORE), ["30000", "7"]),

@@ -45,6 +45,7 @@ from _command_checks import (
     f_index,
     n_of_f,
     phase_of,
+    profile_samples,
 )
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import event as _event
@@ -367,10 +368,10 @@ STOP_IN_DECELERATION = [
     (2, (15, 15, 15, 15), 0.5), (2, (15, 15, 15, 15), 0.97), (3, (12, 7, 9, 15), 0.0),
     (3, (12, 7, 9, 15), 0.5), (3, (12, 7, 9, 15), 0.97), (3, (3, 20, 25, 2), 0.3),
     (3, (3, 20, 25, 2), 0.97),
-    pytest.param(3, (3, 20, 25, 2), 0.0, marks=pytest.mark.xfail(strict=True, reason=(
-        "C side: a stop one sample into stage 3 (DJL, N = 3, 20, 25, 2 samples) ends with a "
-        "stage-4 ramp of 24 samples (jerk 124.4 m/s3) instead of N4 = 2 (1492 m/s3), and "
-        "comes to rest 66 um past the target of the move it stopped"))),
+    # a stop one sample into stage 3 (DJL, N = 3, 20, 25, 2 samples): ending the deceleration
+    # at once would take a stage-4 ramp of 24 samples and rest 66 um past the target; the
+    # FMU keeps the move, which rests first
+    pytest.param(3, (3, 20, 25, 2), 0.0),
 ]
 
 
@@ -386,13 +387,10 @@ def test_stop_in_deceleration_does_not_pass_the_target(pool, profile, N, frac):
     assert check_stop_in_deceleration(drv.rec) == 1
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "C side: DJL, N = 1, 1, 3, 1 samples, Te = 1 ms, v_max = 1, a_max = d_max = 250, execute "
-    "to 0.007 m at step 0, stop set before step 8 (the first sample of stage 3 under way): "
-    "stage 4 becomes 3 samples (jerks 55263, 110526, 55263 m/s3 instead of one sample of "
-    "221053) and the axis rests at 0.0070553 m, 55 um past the target (0.007 without the "
-    "stop)"))
 def test_stop_one_sample_into_stage_3_rests_short_of_the_target(fmu):
+    # DJL, N = 1, 1, 3, 1 samples, Te = 1 ms, execute to 0.007 m, stop before step 8 (stage 3
+    # under way): ending the deceleration at once would rest at 0.0070553 m, 55 um past the
+    # target; the move in progress rests first and is kept
     ax = Axis(profile=3, Te=1e-3, v_max=1.0, a_max=250.0, d_max=250.0, N=(1, 1, 3, 1))
     with GeneratorFMU(fmu) as g:
         drv = _play(g, ax, [(0, {"target": 0.007, "execute": True}), (1, {"execute": False}),
@@ -502,8 +500,9 @@ def test_fractional_steps_are_the_whole_sample_run_in_between(pool, data):
     # next sample with the interval's jerk from the change of a (AL: a from the change of v)
     W = whole.rec.arrays()
     F = rec.arrays()
-    k = np.floor((F["t"] - rec.start_time) / Te + 1e-9).astype(int)
-    sig = W["t"][k + 1] - F["t"]
+    u = np.array(profile_samples(rec))        # the FMU's profile time, in samples
+    k = np.floor(u).astype(int)
+    sig = (k + 1 - u) * Te
     if ax.profile == 1:
         acc = (W["v"][k + 1] - W["v"][k]) / Te
         x = W["x"][k + 1] - W["v"][k + 1] * sig + acc * sig**2 / 2
@@ -519,8 +518,8 @@ def test_fractional_steps_are_the_whole_sample_run_in_between(pool, data):
     assert np.abs(x - F["x"]).max() <= 1e-9 * ax.v_max * Te + 1e-15 * xs, rec.describe()
     assert np.abs(v - F["v"]).max() <= 1e-9 * ax.level * Te + 1e-15 * ax.v_max
     assert a_err <= 1e-9 * ax.level
-    on = np.array([rec.on_grid(q) for q in rec.t])
-    kk = np.round((F["t"][on] - rec.start_time) / Te).astype(int)
+    on = u == k
+    kk = k[on]
     for name in ("x", "v", "a", "done"):
         assert np.array_equal(F[name][on], W[name][kk]), name
 
