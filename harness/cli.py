@@ -12,6 +12,7 @@ import importlib
 import sys
 
 from . import __version__
+from .errors import CommandError
 
 COMMANDS = ("build", "demo", "simulate", "map", "tune", "online", "report", "compare")
 
@@ -81,8 +82,6 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
-    from .commands._common import CommandError
-
     try:
         return int(args.func(args) or 0)
     except CommandError as e:  # a command stops: its exit status, and why

@@ -1,8 +1,9 @@
 """Metrics of one case: run every profile of a scenario and measure it.
 
-:func:`run_case` tunes the jerk times (through the session's engine), runs
-each profile and measures it (:func:`profile_metrics`) against one settling
-band shared by every profile of the case (``simulation.settle_band``, see
+:func:`run_case` tunes the jerk times (:func:`harness.tuning.tune.tune_profile`),
+runs each profile (:meth:`harness.simulation.session.Session.run`) and
+measures it (:func:`profile_metrics`) against one settling band shared by
+every profile of the case (``simulation.settle_band``, see
 :class:`harness.metrics.SettleBand`), and also against the paper's band (DJL's
 residual) when DJL runs; optionally it measures each profile's robustness to a
 map error (:mod:`harness.robustness`).  :class:`ProfileMetrics` holds the
@@ -13,26 +14,24 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .metrics import residual_peak, rise_time, settling_time
+from .metrics import NO_BAND, ZERO_BAND_NOTE, residual_peak, rise_time, settling_time
 from .plant import free_amplitude
-from .tuning import TuningResult
-
-if TYPE_CHECKING:
-    from .cosim import CoSimResult, Session
-    from .results import ScenarioResult
-    from .scenario import Scenario
+from .results import ProfileOutcome, ScenarioResult
+from .robustness import robustness as robustness_curves
+from .scenario import Scenario
+from .simulation.master import CoSimResult
+from .simulation.session import Session
+from .tuning.rule import TuningResult
+from .tuning.tune import jerk_times, tune_profile
+from .uncertainty import DEFAULT_ERRORS, WORST_ERRORS, WORST_SPAN
 
 __all__ = ["ROBUSTNESS_MODES", "ProfileMetrics", "profile_metrics", "run_case"]
 
 ROBUSTNESS_MODES = ("worst", "curves")
 """Values of ``run_case(..., robustness=...)`` besides False / True."""
-
-_NO_BAND = 1e-9
-"""Band used when the one asked for is zero (a residual of exactly 0): 1 nm."""
 
 
 @dataclass
@@ -142,19 +141,6 @@ def profile_metrics(run: CoSimResult, band: float, *,
     )
 
 
-def _jerk_times(sc: Scenario, profile: str, tuning: TuningResult | None
-                ) -> tuple[float, float, float, float] | None:
-    if profile == "AL":
-        return None
-    if tuning is not None:
-        return tuning.T_F
-    if profile == "JL":
-        assert sc.compare.JL_T_F is not None
-        return (sc.compare.JL_T_F,) * 4
-    assert sc.compare.DJL_T_F is not None
-    return sc.compare.DJL_T_F
-
-
 def _robustness_mode(robustness: bool | str | None) -> str | None:
     if robustness is None or robustness is False:
         return None
@@ -206,16 +192,12 @@ def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True,
         If ``robustness`` is none of the above, or if the settling band is the
         paper's (DJL's residual) and DJL is not among the profiles.
     """
-    from .results import ProfileOutcome, ScenarioResult
-    from .robustness import DEFAULT_ERRORS, WORST_ERRORS, WORST_SPAN
-    from .robustness import robustness as rob_fn
-
     mode = _robustness_mode(robustness)
     runs: dict[str, CoSimResult] = {}
     tunings: dict[str, TuningResult | None] = {}
     for prof in sc.compare.profiles:
-        tunings[prof] = session.tune(sc, prof)
-        runs[prof] = session.run(sc, prof, _jerk_times(sc, prof, tunings[prof]))
+        tunings[prof] = tune_profile(session, sc, prof)
+        runs[prof] = session.run(sc, prof, jerk_times(sc, prof, tunings[prof]))
     residuals = {p: r.free_amplitude for p, r in runs.items()}
 
     spec = sc.simulation.settle_band
@@ -223,27 +205,27 @@ def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True,
     if spec.needs == "AL" and "AL" not in runs:
         # the default band (a fraction of AL's residual) in a scenario that does not compare
         # AL: AL is run for the band only (an explicit one is refused when the file is loaded)
-        al = session.run(sc, "AL", None, t_stop=_just_past_motion(sc, session, "AL", None))
+        al = session.run(sc, "AL", None, t_stop=session.t_stop_after_motion(sc, "AL", None))
         residuals_band = {**residuals, "AL": al.free_amplitude}
         source += " (AL run for the band only)"
     else:
         residuals_band = residuals
-    band = spec.resolve(residuals_band)
-    if not band > 0:
-        band, source = _NO_BAND, source + "; zero, so 1 nm"
+    band, fell_back = spec.half_width(residuals_band)
+    if fell_back:
+        source += ZERO_BAND_NOTE
     paper_band = math.nan
     if "DJL" in runs:
-        paper_band = residuals["DJL"] if residuals["DJL"] > 0 else _NO_BAND
+        paper_band = residuals["DJL"] if residuals["DJL"] > 0 else NO_BAND
 
-    jerk = {p: _jerk_times(sc, p, tunings[p]) for p in runs}
+    jerk = {p: jerk_times(sc, p, tunings[p]) for p in runs}
     curves = None
     worst: dict[str, float] = {}
     rs = session if robustness_session is None else robustness_session
     if mode == "curves":
-        curves = rob_fn(sc, rs, jerk, errors=DEFAULT_ERRORS)
+        curves = robustness_curves(sc, rs, jerk, errors=DEFAULT_ERRORS)
         worst = curves.worst(WORST_SPAN)
     elif mode == "worst":
-        worst = rob_fn(sc, rs, jerk, errors=WORST_ERRORS).worst(WORST_SPAN)
+        worst = robustness_curves(sc, rs, jerk, errors=WORST_ERRORS).worst(WORST_SPAN)
 
     outcomes = {}
     for prof, run in runs.items():
@@ -253,10 +235,3 @@ def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True,
             run.z_synced, plan_info=dict(run.plan_info),
             worst_residual_10pct=worst.get(prof, math.nan))
     return ScenarioResult(sc, outcomes, band, source, paper_band=paper_band, robustness=curves)
-
-
-def _just_past_motion(sc: Scenario, session: Session, profile: str,
-                      T_F: tuple[float, ...] | None) -> float:
-    from .robustness import t_stop_after_motion
-
-    return t_stop_after_motion(sc, session, profile, T_F)

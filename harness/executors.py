@@ -24,26 +24,38 @@ Examples
 
 from __future__ import annotations
 
+import asyncio
 import os
 import time
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import Executor, Future, ProcessPoolExecutor
+from concurrent.futures import (
+    Executor,
+    Future,
+    ProcessPoolExecutor,
+    ThreadPoolExecutor,
+    as_completed,
+)
+from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
 from typing import Any
+
+from .errors import HarnessError
 
 __all__ = [
     "CONNECT_TIMEOUT",
     "ExecutorError",
     "SerialExecutor",
+    "describe_executor",
     "executor_workers",
     "make_executor",
+    "run_batches",
 ]
 
 CONNECT_TIMEOUT = 10.0
 """Seconds allowed to reach a Dask scheduler and to find a worker on it."""
 
 
-class ExecutorError(ValueError):
+class ExecutorError(HarnessError, ValueError):
     """The executor cannot be set up: bad worker count, unreachable Dask scheduler."""
 
 
@@ -120,6 +132,31 @@ def executor_workers(executor: Executor) -> int:
         except Exception:  # noqa: BLE001 (a count for reports only)
             return 0
     return int(getattr(executor, "_max_workers", 0) or 0)
+
+
+def describe_executor(executor: Executor, scheduler: str | None = None) -> str:
+    """Where the tasks of an executor run, in words (for summaries).
+
+    Parameters
+    ----------
+    executor : Executor
+        From :func:`make_executor` or any :class:`~concurrent.futures.Executor`.
+    scheduler : str, optional
+        The Dask scheduler's address, when known.
+    """
+    if isinstance(executor, SerialExecutor):
+        return "in this process"
+    if isinstance(executor, ProcessPoolExecutor):
+        return "local process pool"
+    if isinstance(executor, ThreadPoolExecutor):
+        return "thread pool"
+    client = getattr(executor, "_client", None)  # distributed's ClientExecutor
+    if client is not None:
+        try:
+            return f"Dask cluster {scheduler or client.scheduler.address}"
+        except Exception:  # noqa: BLE001 (a label only)
+            return "Dask cluster"
+    return type(executor).__name__
 
 
 def check_workers(workers: int | None) -> int:
@@ -252,11 +289,8 @@ def _probe(address: str, timeout: float) -> str:
     ``distributed.Client`` can wait forever on a port that accepts connections
     but never answers.
     """
-    import asyncio
-    from concurrent.futures import ThreadPoolExecutor
-
     async def identity() -> Any:
-        from distributed.core import rpc
+        from distributed.core import rpc  # deferred: dask.distributed is heavy to import
 
         async with rpc(address, timeout=timeout) as r:
             return await r.identity()
@@ -322,9 +356,6 @@ def run_batches(ex: Executor, task: Callable[..., Any], args: Sequence[Any],
     wall : float
         Wall-clock time (s).
     """
-    from concurrent.futures import as_completed
-    from concurrent.futures.process import BrokenProcessPool
-
     starts = list(range(0, len(items), batch))
     results: list[Any] = [None] * len(starts)
     serial = isinstance(ex, SerialExecutor)

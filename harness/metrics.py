@@ -326,6 +326,25 @@ class SettleBand:
         r = float(residuals[need])  # type: ignore[index]
         return r * self.value if self.kind == "AL" else r
 
+    def half_width(self, residuals: Mapping[str, float]) -> tuple[float, bool]:
+        """Return the band (m) of one case, never zero, and whether it fell back to 1 nm.
+
+        A band made of a residual of exactly 0 (an undamped move that leaves
+        none) would make every settling time that of the last touch of the
+        target: it falls back to :data:`NO_BAND` (1 nm), and the second value
+        says so (the labels then add "zero, so 1 nm").
+        """
+        band = self.resolve(residuals)
+        if band > 0:
+            return band, False
+        return NO_BAND, True
+
+
+NO_BAND = 1e-9
+"""The band used when the one asked for is zero (a residual of exactly 0): 1 nm."""
+
+ZERO_BAND_NOTE = "; zero, so 1 nm"
+"""What a band's label adds when it fell back to :data:`NO_BAND`."""
 
 DEFAULT_SETTLE_BAND = SettleBand("AL", 0.01)
 """Default settling band: 1 % of AL's residual vibration in the same case."""

@@ -47,7 +47,6 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
-import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -55,13 +54,17 @@ from typing import Any
 
 import numpy as np
 
-from .cosim import CoSimResult, Session, plan_info
 from .evaluation import ProfileMetrics, profile_metrics
-from .fmu.runner import FMUError, LogRecord
-from .planner import AxisFMU
-from .plant import ScheduledMode, ScheduledPlant
+from .fmu.runner import LogRecord
+from .metrics import ZERO_BAND_NOTE
+from .plant import ScheduledMode
 from .scenario import Scenario, load_scenario
-from .tuning import TuningResult
+from .simulation.axis import samples_per_step
+from .simulation.fmu_axis import FMUAxis
+from .simulation.master import CoSimResult, RunUntilDone, cosimulate
+from .simulation.session import Session
+from .tuning.rule import TuningResult
+from .tuning.tune import jerk_times, tune_profile
 
 __all__ = [
     "COMMANDED_VARIABLES",
@@ -443,8 +446,8 @@ def stage_records(t: np.ndarray, stage: np.ndarray, j: np.ndarray, a_AL: np.ndar
 
 
 def cosimulate_online(
-    axis: AxisFMU,
-    z_axis: AxisFMU,
+    axis: FMUAxis,
+    z_axis: FMUAxis,
     params: Mapping[str, Any],
     z_params: Mapping[str, Any],
     modes: Sequence[ScheduledMode],
@@ -458,24 +461,24 @@ def cosimulate_online(
 ) -> tuple[CoSimResult, dict[str, np.ndarray]]:
     """Co-simulate the excited axis with ``f_mode`` set from z at every communication point.
 
-    The master of :func:`harness.cosim.cosimulate`, plus one input: before the
-    ``doStep`` from t_k it sets the excited axis' ``f_mode`` to
-    ``f_mode_of_z(z(t_k))``, z(t_k) the Z generator's output at t_k.  The
-    run ends ``t_after`` after both moves have ended (the excited one when its
-    ``done`` output turns true).
+    The master (:func:`harness.simulation.master.cosimulate`) with its input
+    hook: before the ``doStep`` from t_k it sets the excited axis' ``f_mode``
+    to ``f_mode_of_z(z(t_k))``, z(t_k) the Z generator's output at t_k; its
+    recorders keep ``stage``, ``done`` and ``a_AL``.  The run ends ``t_after``
+    after both moves have ended (the excited one when its ``done`` output
+    turns true, :class:`~harness.simulation.master.RunUntilDone`).
 
     The plant's input over the step from t_k is the jerk ``j(t_k)``: an input
     read at t_k changes the FMU's plan from the first sample after t_k only,
     so every output at t_k, ``j`` included, holds over [t_k, t_k + Te) (the
     FMU's contract), and with h = Te the plant gets the profile's jerk exactly
     (it equals the chord (a(t_k+1) − a(t_k))/Te to rounding, replans
-    included).  With h = m·Te, ``j(t_k)`` is held over the step as in
-    :func:`harness.cosim.cosimulate` (an approximation: a stage may start
-    within the step).
+    included).  With h = m·Te, ``j(t_k)`` is held over the step, as the master
+    does for every run (an approximation: a stage may start within the step).
 
     Parameters
     ----------
-    axis, z_axis : AxisFMU
+    axis, z_axis : FMUAxis
         The two generator instances (re-planned here).
     params : mapping
         The excited axis' parameters (``jerk_source`` 2 or 3 for the online rule).
@@ -502,8 +505,8 @@ def cosimulate_online(
     Returns
     -------
     run : CoSimResult
-        As :func:`harness.cosim.cosimulate` gives; ``t_end`` is where ``done``
-        turned true.
+        As :func:`harness.simulation.master.cosimulate` gives; ``t_end`` is
+        where ``done`` turned true.
     inputs : dict of ndarray
         ``f_mode`` (the value set before the step from each point; NaN at the
         last), ``stage``, ``done`` and ``a_AL`` (outputs at each point).
@@ -517,123 +520,26 @@ def cosimulate_online(
     FMUError
         If an FMU call fails (with the FMU's log).
     """
-    p0 = dict(params)
-    T_x = axis.plan(p0)
-    T_z = z_axis.plan(z_params)
-    gx, gz = axis.g, z_axis.g
-    Te = float(gx.get("Te"))
-    Te_z = float(gz.get("Te"))
-    h = Te if step is None else float(step)
-    for name, te in (("excited axis", Te), ("Z axis", Te_z)):
-        r = h / te
-        if abs(r - round(r)) > 1e-9 * max(1.0, r) or round(r) < 1:
-            raise ValueError(f"communication step {h:g} s is not a whole multiple of the "
-                             f"{name}'s Te = {te:g} s")
-    t_start = float(gx.get("t_start"))
-    z_t_end = float(gz.get("t_start")) + T_z
-    plant = ScheduledPlant(modes)
-    pstep = plant.step_jerk
-    v3x, v3z = gx.fmi_version == 3, gz.fmi_version == 3
-    getx = gx.fmu.getFloat64 if v3x else gx.fmu.getReal
-    getz = gz.fmu.getFloat64 if v3z else gz.fmu.getReal
-    setf = gx.fmu.setFloat64 if v3x else gx.fmu.setReal
-    geti = gx.fmu.getInt32 if v3x else gx.fmu.getInteger
-    getb = gx.fmu.getBoolean
-    stepx, stepz = gx.fmu.doStep, gz.fmu.doStep
-    vrx = gx.vr(["x", "v", "a", "j", "a_AL"])
-    vrz = gz.vr(["x", "v"])
-    vr_f = gx.vr(["f_mode"])
-    vr_stage = gx.vr(["stage"])
-    vr_done = gx.vr(["done"])
-
-    ox = list(getx(vrx))
-    oz = list(getz(vrz))
-    X, Z, E, S = [ox], [oz], [0.0], [tuple(plant.state)]
-    F: list[float] = []
-    STAGE = [int(geti(vr_stage)[0])]
-    DONE = [bool(getb(vr_done)[0])]
-    half = 0.125 * h
-    k_start = max(0, math.ceil(t_start / h - 1e-9))
-    k_end: int | None = None
-    n_stop: int | None = None
-    n_max = math.ceil(t_max / h)
-    from fmpy.fmi1 import FMICallException
-
-    n_log = len(gx.log)
+    axis.plan(params)
+    z_axis.plan(z_params)
+    g = axis.g
+    n_log = len(g.log)
     if events is not None:
-        gx.fmu.setDebugLogging(True, ["logEvents"])
-    t0 = time.perf_counter()
-    k = 0
+        g.fmu.setDebugLogging(True, ["logEvents"])
     try:
-        while n_stop is None or k < n_stop:
-            if n_stop is None and k >= n_max:
-                raise RuntimeError(f"the online move has not ended by t = {t_max:g} s (its "
-                                   f"done output is still false)")
-            tk = k * h
-            f = f_mode_of_z(oz[0])
-            F.append(f)
-            try:
-                setf(vr_f, [f])
-            except FMICallException as e:
-                raise FMUError(str(getattr(e, "function", "setReal")), int(e.status), gx.log,
-                               variable="f_mode", value=f) from None
-            stepx(tk, h)
-            stepz(tk, h)
-            ox1 = getx(vrx)
-            oz1 = getz(vrz)
-            zm = 0.5 * (oz[0] + oz1[0]) + half * (oz[1] - oz1[1])
-            # j(t_k) holds over [t_k, t_k + Te): f_mode read at t_k acts from the next sample
-            E.append(pstep(h, ox[2], ox[3], zm))
-            S.append(tuple(plant.state))
-            X.append(ox1)
-            Z.append(oz1)
-            STAGE.append(int(geti(vr_stage)[0]))
-            DONE.append(bool(getb(vr_done)[0]))
-            ox, oz = ox1, oz1
-            k += 1
-            if k_end is None and k > k_start and DONE[-1]:
-                k_end = k
-                t_both = max(k * h, z_t_end)
-                n_stop = math.ceil((t_both + t_after) / h - 1e-9)
-    except FMICallException as e:
-        raise FMUError(str(getattr(e, "function", "doStep")), int(e.status),
-                       gx.log + gz.log) from None
+        run = cosimulate(axis, z_axis, modes, RunUntilDone(t_after, t_max), step,
+                         profile=profile, record=("a_AL", "stage", "done"),
+                         inputs=lambda k, z: {"f_mode": f_mode_of_z(z)})
     finally:
         if events is not None:
-            events.extend(gx.log[n_log:])
+            events.extend(g.log[n_log:])
             try:
-                gx.fmu.setDebugLogging(False, [])
-            except FMICallException:  # the instance failed: its error is the one to report
+                g.fmu.setDebugLogging(False, [])
+            except Exception:  # noqa: BLE001 (the instance failed: its error is the one to report)
                 pass
-    wall = time.perf_counter() - t0
-    gx.time = gz.time = k * h
-    n = k
-    F.append(math.nan)
-    assert k_end is not None
-
-    t = h * np.arange(n + 1)
-    Xa = np.asarray(X, dtype=float)
-    Za = np.asarray(Z, dtype=float)
-    Sa = np.asarray(S, dtype=float)
-    nm = len(plant.modes)
-    f_modes = np.vstack([m.f_array(Za[:, 0]) for m in plant.modes])
-    state_end = [(float(Sa[k_end, 2 * i]), float(Sa[k_end, 2 * i + 1])) for i in range(nm)]
-    modes_end = [m.at(float(Za[k_end, 0])) for m in plant.modes]
-    x0 = float(params.get("x0", gx.get("x0")))
-    dist = float(params.get("distance", gx.get("distance")))
-    t_end = k_end * h
-    run = CoSimResult(
-        profile=profile, t=t, x=Xa[:, 0], v=Xa[:, 1], a=Xa[:, 2], j=Xa[:, 3],
-        z=Za[:, 0], v_z=Za[:, 1], eps=np.asarray(E), eps_modes=Sa[:, 0::2].T.copy(),
-        f=f_modes, t_start=t_start, t_end=t_end, z_t_end=z_t_end, x0=x0, target=x0 + dist,
-        state_end=state_end, modes_end=modes_end, N_F=axis.N_F(), Te=Te, step=h,
-        z_v_max=float(z_params.get("v_max", math.nan)), fmi_version=gx.fmi_version,
-        wall_time=wall, final_state=list(plant.state),
-        final_modes=[m.at(float(Za[-1, 0])) for m in plant.modes],
-        plan_info={**plan_info(axis, z_axis, T_x, T_z), "motion_time": t_end - t_start},
-    )
-    inputs = {"f_mode": np.asarray(F), "stage": np.asarray(STAGE, dtype=np.int64),
-              "done": np.asarray(DONE, dtype=bool), "a_AL": Xa[:, 4].copy()}
+    sig = run.signals
+    inputs = {"f_mode": sig["f_mode"], "stage": sig["stage"].astype(np.int64),
+              "done": sig["done"].astype(bool), "a_AL": sig["a_AL"].copy()}
     return run, inputs
 
 
@@ -1116,8 +1022,6 @@ def jerk_source_values(md: Any) -> set[int] | None:
 
 def _run(sc: Scenario, session: Session, step: float | None, offline: str,
          jerk_source: int) -> OnlineResult:
-    from .evaluation import _jerk_times
-
     md = session.axis.g.md
     names = {v.name for v in md.modelVariables}
     missing = [n for n in COMMANDED_VARIABLES if n not in names]
@@ -1131,14 +1035,11 @@ def _run(sc: Scenario, session: Session, step: float | None, offline: str,
                          f"{', '.join(str(v) for v in sorted(allowed))}")
     if step is not None:
         h = float(step)
-        r = h / sc.simulation.Te
-        if not (math.isfinite(r) and round(r) >= 1 and abs(r - round(r)) <= 1e-9 * r):
-            raise ValueError(f"step {step!r} s is not a whole multiple of Te = "
-                             f"{sc.simulation.Te:g} s")
+        samples_per_step(h, sc.simulation.Te, "generator")
         sc = dataclasses.replace(sc, simulation=dataclasses.replace(sc.simulation, step=h))
     h = sc.simulation.step
-    tuning = session.tune(sc, offline)
-    T_F = _jerk_times(sc, "DJL", tuning)
+    tuning = tune_profile(session, sc, offline)
+    T_F = jerk_times(sc, "DJL", tuning)
     off = session.run(sc, offline, T_F)
 
     # the online run: the same move and Z move, jerk times from f_mode
@@ -1169,16 +1070,13 @@ def _run(sc: Scenario, session: Session, step: float | None, offline: str,
     residuals = {offline: off.free_amplitude, ONLINE: on.free_amplitude,
                  "DJL": off.free_amplitude}
     if spec.needs == "AL":
-        from .robustness import t_stop_after_motion
-
-        al = session.run(sc, "AL", None, t_stop=t_stop_after_motion(sc, session, "AL", None))
+        al = session.run(sc, "AL", None, t_stop=session.t_stop_after_motion(sc, "AL", None))
         residuals["AL"] = al.free_amplitude
-    band = spec.resolve(residuals)
-    if not band > 0:
-        band = 1e-9
+    band, fell_back = spec.half_width(residuals)
+    label = spec.label + (ZERO_BAND_NOTE if fell_back else "")
     metrics = {offline: profile_metrics(off, band), ONLINE: profile_metrics(on, band)}
     return OnlineResult(sc, on, off, tuning, rec["f_mode"], rec["stage"], rec["done"], stages,
-                        metrics, band, spec.label, offline_profile=offline, a_AL=rec["a_AL"],
+                        metrics, band, label, offline_profile=offline, a_AL=rec["a_AL"],
                         ramps=ramps, ramp_mismatch=mismatch, events=events,
                         jerk_source=jerk_source)
 

@@ -29,8 +29,15 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from .claims import ClaimResult, Settings, run_claims
+import numpy as np
+
+from . import __version__
+from .claims import ClaimResult, Settings
 from .claims.formulas import DERIVATIONS
+from .claims.registry import run_claims
+from .files import OutputSet
+from .peers.compare import compare_scenario
+from .scenario import load_scenario
 
 _CSS = """
 body { font-family: -apple-system, "Segoe UI", Helvetica, Arial, sans-serif; margin: 2em auto;
@@ -91,7 +98,7 @@ def _e(text: object) -> str:
 
 
 def _figure_png(fig) -> bytes:
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=100)
@@ -107,7 +114,6 @@ def _versions() -> str:
             parts.append(f"{mod} {getattr(m, '__version__', '?')}")
         except ImportError:  # pragma: no cover
             parts.append(f"{mod} missing")
-    from . import __version__
 
     return f"djl-fmu {__version__}; " + ", ".join(parts)
 
@@ -167,11 +173,6 @@ def peers_section(settings: Settings,
     fast settings use fewer points on the robustness curves.  One figure per scenario:
     the stationary-mode curves beside the time-varying map-error curves.
     """
-    import numpy as np
-
-    from .peers.compare import compare_scenario
-    from .scenario import load_scenario
-
     errors = np.linspace(-0.4, 0.4, 9 if settings.fast else 41)
     map_errors = np.linspace(-0.2, 0.2, 9 if settings.fast else 41)
     parts = [
@@ -202,7 +203,7 @@ def peers_section(settings: Settings,
         def img_src(_n: int, _i: int, png: bytes) -> str:
             return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
 
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
     for i, name in enumerate(("X", "Y")):
         sc = load_scenario(name).with_fmu(
@@ -303,7 +304,7 @@ def write_report(path: str | os.PathLike = "report.html", *, fast: bool = False,
     ----------
     path : path-like
         HTML file to write (parent folders are created).  The HTML and its
-        figures are written as one set (:class:`harness.commands._outputs.OutputSet`):
+        figures are written as one set (:class:`harness.files.OutputSet`):
         an error or an interruption leaves the previous report whole.
     fast : bool
         Small grids (as in the test suite).
@@ -354,8 +355,6 @@ def write_report(path: str | os.PathLike = "report.html", *, fast: bool = False,
     text = render_html(results, settings=settings, elapsed=elapsed, command=command,
                        img_src=img_src, extra_sections=extra)
     # the HTML and its figures: one set, replacing the previous one whole
-    from .commands._outputs import OutputSet
-
     with OutputSet(path.parent) as o:
         o.path(path.name).write_text(text, encoding="utf-8")
         for name, png in pngs.items():

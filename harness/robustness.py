@@ -21,31 +21,31 @@ scaled.
 
 Examples
 --------
->>> from harness.cosim import Session
 >>> from harness.robustness import robustness
 >>> from harness.scenario import load_scenario
+>>> from harness.simulation.session import Session
+>>> from harness.tuning.tune import tune_profile
 >>> sc = load_scenario("X")                                         # doctest: +SKIP
 >>> with Session() as s:                                            # doctest: +SKIP
-...     T = {p: s.tune(sc, p) for p in ("AL", "JL", "DJL")}
+...     T = {p: tune_profile(s, sc, p) for p in ("AL", "JL", "DJL")}
 ...     rob = robustness(sc, s, T)
 >>> rob.worst()                                                     # doctest: +SKIP
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from .tuning import TuningResult
-
-if TYPE_CHECKING:
-    from .cosim import Session
-    from .scenario import Scenario
+from .scenario import Scenario
+from .simulation.plots import COLORS
+from .simulation.session import Session
+from .tuning.rule import TuningResult
+from .uncertainty import DEFAULT_ERRORS, WORST_ERRORS, WORST_SPAN
 
 __all__ = [
     "DEFAULT_ERRORS",
@@ -54,46 +54,7 @@ __all__ = [
     "RobustnessResult",
     "map_error_residuals",
     "robustness",
-    "t_stop_after_motion",
 ]
-
-DEFAULT_ERRORS = np.linspace(-0.2, 0.2, 41)
-"""Map errors of the curves: −20 % to +20 %, 1 % apart."""
-
-WORST_SPAN = 0.10
-"""Span of the worst case: map errors within ±10 %."""
-
-WORST_ERRORS = np.linspace(-WORST_SPAN, WORST_SPAN, 21)
-"""Map errors of the worst case alone: −10 % to +10 %, 1 % apart (a subset of the curves')."""
-
-
-def t_stop_after_motion(sc: Scenario, session: Session, profile: str,
-                        T_F: Sequence[float] | None) -> float:
-    """End of a run that only needs the state when the excited axis' reference ends (s).
-
-    The first communication point at or after the end of the motion, plus one
-    step: the residual (the state at the end of the reference) is then in the
-    record, and nothing after it is simulated.
-
-    Parameters
-    ----------
-    sc : Scenario
-        The scenario (its move and simulation settings).
-    session : Session
-        Its generator instances (the excited axis' is re-planned here).
-    profile : str
-        ``AL``, ``JL`` or ``DJL``.
-    T_F : sequence of 4 float, optional
-        Jerk times (s); None for AL.
-
-    Returns
-    -------
-    float
-        Stop time (s).
-    """
-    T_x = session.axis.plan(session.move_params(sc, profile, T_F))
-    return sc.move.t_start + T_x + sc.simulation.step
-
 
 def _jerk(profile: str, value: Any) -> tuple[float, float, float, float] | None:
     if isinstance(value, TuningResult):
@@ -115,13 +76,11 @@ def map_error_residuals(sc: Scenario, session: Session, profile: str,
                         errors: Sequence[float] | np.ndarray) -> np.ndarray:
     """Residual vibration of one profile for each map error e.
 
-    The profile is run with the jerk times ``T_F`` (tuned on the nominal map)
-    on the scenario whose mode map is ``sc.modemap.scaled(1 + e)``, Z moving as
-    in the scenario, and stopped just past the end of the motion
-    (:func:`t_stop_after_motion`): the residual is the free-oscillation
-    amplitude when the reference ends.  If the session has a method
-    ``map_error_residuals(sc, profile, T_F, factors)`` (a vectorised engine),
-    it is used instead, with ``factors = 1 + errors``.
+    The profile is planned with the jerk times ``T_F`` (tuned on the nominal
+    map), Z moving as in the scenario; the plant is stepped to the end of the
+    motion once per error with every frequency of the map multiplied by 1 + e
+    (:meth:`harness.simulation.session.Session.map_error_residuals`): the
+    residual is the free-oscillation amplitude when the reference ends.
 
     Parameters
     ----------
@@ -146,19 +105,7 @@ def map_error_residuals(sc: Scenario, session: Session, profile: str,
     ValueError
         If an error is not finite or ≤ −1 (a frequency ≤ 0).
     """
-    e = np.asarray(errors, dtype=float).ravel()
-    if not np.all(np.isfinite(e)) or np.any(e <= -1.0):
-        raise ValueError(f"map errors must be finite and > -1, got {e!r}")
-    factors = 1.0 + e
-    vectorised = getattr(session, "map_error_residuals", None)
-    if callable(vectorised):
-        return np.asarray(vectorised(sc, profile, T_F, factors), dtype=float).ravel()
-    t_stop = t_stop_after_motion(sc, session, profile, T_F)
-    out = np.empty(e.size)
-    for i, k in enumerate(factors.tolist()):
-        sck = dataclasses.replace(sc, modemap=sc.modemap.scaled(k))
-        out[i] = session.run(sck, profile, T_F, t_stop=t_stop).free_amplitude
-    return out
+    return session.map_error_residuals(sc, profile, T_F, errors)
 
 
 @dataclass
@@ -234,9 +181,7 @@ class RobustnessResult:
         -------
         matplotlib.figure.Figure
         """
-        import matplotlib.pyplot as plt
-
-        from .results import COLORS
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         fig, ax = plt.subplots(figsize=(9, 5.5))
         x = 100.0 * self.errors

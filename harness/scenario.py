@@ -92,15 +92,18 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
 
+from .errors import HarnessError
+from .fmu.runner import check_fmu_binary, check_fmu_variables
 from .metrics import DEFAULT_SETTLE_BAND, SettleBand, parse_settle_band
 from .modemap import CantileverLaw, ConstantLaw, LinearLaw, ModeMap, ModeSpec, TableLaw
-from .optimize import DJL_METHODS, JL_METHODS, VARIANTS
-from .tuning import RULES
+from .tuning.methods import DJL_METHODS, JL_METHODS, RULES, VARIANTS, TuningOptions
 
 __all__ = [
     "CompareSpec",
@@ -139,7 +142,7 @@ MAX_STEP = 1.0
 """Largest ``Te`` and communication ``step`` (s)."""
 
 
-class ScenarioError(ValueError):
+class ScenarioError(HarnessError, ValueError):
     """A scenario that cannot be run: names the file, the key and the value.
 
     Attributes
@@ -244,10 +247,8 @@ class CompareSpec:
     max_motion_time: float | str | None = None
     period_band: float = 0.5
 
-    def tuning_options(self) -> Any:
-        """Return the :class:`harness.optimize.TuningOptions` of this table."""
-        from .optimize import TuningOptions
-
+    def tuning_options(self) -> TuningOptions:
+        """Return the :class:`harness.tuning.methods.TuningOptions` of this table."""
         return TuningOptions(self.map_error, self.damping, self.max_motion_time,
                              self.period_band)
 
@@ -295,7 +296,7 @@ class Scenario:
     """A checked scenario.
 
     Use :func:`load_scenario` (file or embedded name) or :func:`parse_scenario`.
-    Run it with :func:`harness.cosim.run_scenario`.
+    Run it with :func:`harness.sweeps.run_scenario`.
     """
 
     name: str
@@ -534,8 +535,6 @@ class _Shown(str):
 
 
 def _check_fmu(source: str, key: str, path: Path) -> None:
-    from .planner import check_fmu_binary, check_fmu_variables
-
     if not path.is_file():
         raise ScenarioError(source, key, str(path), "no such FMU file")
     try:
@@ -856,8 +855,6 @@ def _check_samples(scen: Scenario) -> None:
     if cmp.DJL_T_F is not None or cmp.JL_T_F is not None:
         jerk = max(sum(cmp.DJL_T_F or ()), 4 * (cmp.JL_T_F or 0.0))
     else:
-        import numpy as np
-
         zs = np.unique(np.add.outer(np.asarray(z0s), np.asarray([0.0, *dzs])))
         try:
             f_lo = float(np.min(scen.modemap.tuned.f_array(zs)))

@@ -12,8 +12,9 @@ Parallel runs
     batch, :func:`batch_size`, to amortise the task overhead), submitted to a
     :class:`concurrent.futures.Executor` (:func:`harness.executors.make_executor`:
     a local process pool, or a Dask cluster with ``scheduler``).  Each worker
-    keeps one :class:`~harness.cosim.Session` (per process and thread) between
-    batches.  The results are put back in grid order.
+    keeps one :class:`~harness.simulation.session.Session` (per process and
+    thread) between batches (:func:`harness.sweeps.worker_session`).  The
+    results are put back in grid order.
 
 Determinism
     Every move is computed by the same code from the same inputs whatever the
@@ -23,8 +24,8 @@ Determinism
 
 Examples
 --------
->>> from harness.workspace import run_map
->>> res = run_map("X", max_moves=200, workers=2)     # doctest: +SKIP
+>>> from harness.workspace import run_workspace_map
+>>> res = run_workspace_map("X", max_moves=200, workers=2)     # doctest: +SKIP
 >>> print(res.table()); res.to_csv("X-map.csv")       # doctest: +SKIP
 """
 
@@ -34,7 +35,6 @@ import math
 import os
 import socket
 import sys
-import threading
 import time
 from collections.abc import Sequence
 from concurrent.futures import Executor
@@ -43,22 +43,31 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from tqdm import tqdm
 
+from .errors import BatchError, MoveError
+from .evaluation import run_case
+from .executors import describe_executor, executor_workers, make_executor, run_batches
+from .files import write_csv
+from .metrics import table2_stats
+from .results import TABLE2_PROFILES, SweepResult
 from .scenario import Scenario, ScenarioError, load_scenario
+from .simulation.session import ENGINES, Session
+from .sweeps import close_worker_session, worker_session
 
 __all__ = [
     "ENGINES",
     "MapError",
     "MapResult",
     "MoveError",
+    "WorkspaceMap",
+    "WorkspaceMapError",
     "batch_size",
     "check_engine",
     "run_batch",
     "run_map",
+    "run_workspace_map",
 ]
-
-ENGINES = ("fmu", "fast")
-"""Evaluation engines (see :class:`harness.cosim.Session`)."""
 
 MAX_BATCH = 100
 """Largest number of moves in one task."""
@@ -70,49 +79,15 @@ Point = tuple[float, float, float, float]
 """One move of the grid: ``(z0, z_distance, distance, v_max)`` (m, m, m, m/s)."""
 
 
-class MapError(RuntimeError):
-    """A map could not be run: a move failed, or a worker died."""
+class WorkspaceMapError(BatchError):
+    """A workspace map could not be run: a move failed, or a worker died."""
 
 
-class MoveError(RuntimeError):
-    """One move of a map failed (raised in the worker; names the move)."""
+MapError = WorkspaceMapError
+"""The former name of :class:`WorkspaceMapError`."""
 
 
 # ----------------------------------------------------------- the worker side
-
-_LOCAL = threading.local()
-
-
-def _make_session(engine: str, fmu: str | Path | None, fmi_version: int) -> Any:
-    """Create a :class:`~harness.cosim.Session` for ``engine``."""
-    from .cosim import Session
-
-    return Session(fmu, fmi_version, engine=engine)
-
-
-def _worker_session(engine: str, sc: Scenario) -> Any:
-    """Return the session of this worker (process and thread), created on first use."""
-    sim = sc.simulation
-    key = (engine, str(sim.fmu) if sim.fmu is not None else None, sim.fmi_version)
-    cur = getattr(_LOCAL, "session", None)
-    if cur is not None and getattr(_LOCAL, "key", None) == key:
-        return cur
-    close_worker_session()
-    _LOCAL.session = _make_session(engine, sim.fmu, sim.fmi_version)
-    _LOCAL.key = key
-    return _LOCAL.session
-
-
-def close_worker_session() -> None:
-    """Close the session this process and thread keep between batches, if any."""
-    cur = getattr(_LOCAL, "session", None)
-    _LOCAL.session = _LOCAL.key = None
-    if cur is not None:
-        try:
-            cur.close()
-        except Exception:  # noqa: BLE001 (an instance that already failed)
-            pass
-
 
 @dataclass
 class BatchResult:
@@ -166,11 +141,8 @@ def run_batch(scenario: Scenario, engine: str, start: int, points: Sequence[Poin
     MoveError
         If a move fails; the message names it (grid index and values).
     """
-    from .evaluation import run_case
-    from .results import TABLE2_PROFILES, SweepResult
-
     t0 = time.perf_counter()
-    session = _worker_session(engine, scenario)
+    session = worker_session(engine, scenario)
     out = []
     keys = []
     compared = TABLE2_PROFILES if set(TABLE2_PROFILES) <= set(scenario.compare.profiles) else None
@@ -222,7 +194,7 @@ def check_engine(engine: str, scenario: Scenario | None = None) -> None:
         raise ValueError(f"unknown engine {engine!r}: choose from {', '.join(ENGINES)}")
     sim = scenario.simulation if scenario is not None else None
     try:
-        s = _make_session(engine, sim.fmu if sim else None, sim.fmi_version if sim else 2)
+        s = Session(sim.fmu if sim else None, sim.fmi_version if sim else 2, engine=engine)
     except Exception as e:  # noqa: BLE001 (any failure to start is reported as text)
         raise ValueError(f"the {engine!r} engine cannot start: {type(e).__name__}: {e}"
                          ) from None
@@ -232,35 +204,13 @@ def check_engine(engine: str, scenario: Scenario | None = None) -> None:
 def _progress_bar(total: int, enabled: bool, desc: str) -> Any:
     if not enabled or not sys.stderr.isatty():
         return None
-    from tqdm import tqdm
-
     return tqdm(total=total, desc=desc, unit="move", leave=False)
 
 
-def _describe_executor(executor: Executor, scheduler: str | None) -> str:
-    from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
-
-    from .executors import SerialExecutor
-
-    if isinstance(executor, SerialExecutor):
-        return "in this process"
-    if isinstance(executor, ProcessPoolExecutor):
-        return "local process pool"
-    if isinstance(executor, ThreadPoolExecutor):
-        return "thread pool"
-    client = getattr(executor, "_client", None)  # distributed's ClientExecutor
-    if client is not None:
-        try:
-            return f"Dask cluster {scheduler or client.scheduler.address}"
-        except Exception:  # noqa: BLE001 (a label only)
-            return "Dask cluster"
-    return type(executor).__name__
-
-
-def run_map(scenario: Scenario | str | Path, *, engine: str = "fast",
+def run_workspace_map(scenario: Scenario | str | Path, *, engine: str = "fast",
             workers: int | None = None, scheduler: str | None = None,
             max_moves: int | None = None, progress: bool = False,
-            executor: Executor | None = None, batch: int | None = None) -> MapResult:
+            executor: Executor | None = None, batch: int | None = None) -> WorkspaceMap:
     """Run every move of a scenario's ``[map]`` grid; results in grid order.
 
     Parameters
@@ -287,7 +237,7 @@ def run_map(scenario: Scenario | str | Path, *, engine: str = "fast",
 
     Returns
     -------
-    MapResult
+    WorkspaceMap
 
     Raises
     ------
@@ -297,11 +247,9 @@ def run_map(scenario: Scenario | str | Path, *, engine: str = "fast",
         Bad engine, ``max_moves`` or ``batch``; an engine that cannot start;
         :class:`harness.executors.ExecutorError` for bad ``workers`` or an
         unreachable scheduler.
-    MapError
+    WorkspaceMapError
         If a move fails or a worker dies (the message names the move).
     """
-    from .executors import executor_workers, make_executor
-
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     if sc.map is None:
         raise ScenarioError(sc.source, "map", None, "the scenario has no [map] table (the "
@@ -314,25 +262,23 @@ def run_map(scenario: Scenario | str | Path, *, engine: str = "fast",
     bs = batch or batch_size(len(points))
     if executor is not None:
         return _run_on(sc, engine, points, bs, executor, executor_workers(executor),
-                       _describe_executor(executor, None), progress)
+                       describe_executor(executor, None), progress)
     with make_executor(workers, scheduler) as ex:
         return _run_on(sc, engine, points, bs, ex, executor_workers(ex),
-                       _describe_executor(ex, scheduler), progress)
+                       describe_executor(ex, scheduler), progress)
 
 
 def _run_on(sc: Scenario, engine: str, points: list[Point], bs: int, ex: Executor,
-            n_workers: int, where: str, progress: bool) -> MapResult:
-    from .executors import run_batches
-
+            n_workers: int, where: str, progress: bool) -> WorkspaceMap:
     batches, wall = run_batches(
-        ex, run_batch, (sc, engine), points, bs, error=MapError, passthrough=MoveError,
+        ex, run_batch, (sc, engine), points, bs, error=WorkspaceMapError, passthrough=MoveError,
         progress=_progress_bar(len(points), progress, f"map {sc.name}"),
         on_serial_end=close_worker_session)
     rows = [r for br in batches for r in br.rows]
     keys = [k for br in batches for k in br.keys]
     busy = sum(br.busy_time for br in batches)
     _mark_duplicates(rows, keys)
-    return MapResult(sc, points, rows, engine=engine, workers=n_workers, wall_time=wall,
+    return WorkspaceMap(sc, points, rows, engine=engine, workers=n_workers, wall_time=wall,
                      busy_time=busy, batch=bs, executor=where,
                      worker_ids=sorted({br.worker for br in batches}))
 
@@ -361,7 +307,7 @@ _QUANTITIES = {  # figure name: what its colours show
 
 
 @dataclass
-class MapResult:
+class WorkspaceMap:
     """The results of a map: CSV rows per move, in grid order, and how they were computed.
 
     Attributes
@@ -440,8 +386,6 @@ class MapResult:
 
     def to_csv(self, path: str | Path) -> Path:
         """Write :meth:`rows` as CSV (atomically); return the path."""
-        from .results import write_csv
-
         return write_csv(path, self.rows())
 
     def values(self, column: str, profile: str | None = None) -> np.ndarray:
@@ -486,8 +430,6 @@ class MapResult:
 
     def table(self) -> str:
         """Short text summary: moves, time, cost per move, and per-profile residuals."""
-        from .metrics import table2_stats
-
         sc = self.scenario
         axes = sc.map_axes()
         dims = " x ".join(f"{n} {len(a)}" for n, a in zip(("z0", "dz", "d", "v_max"), axes,
@@ -666,38 +608,8 @@ def _edges(v: np.ndarray) -> np.ndarray:
     return np.concatenate(([v[0] - (mid[0] - v[0])], mid, [v[-1] + (v[-1] - mid[-1])]))
 
 
-_FAST_SESSION: list[Any] = []
+run_map = run_workspace_map
+"""The former name of :func:`run_workspace_map`."""
 
-
-def run_sweep_batch(scenario: Scenario, engine: str, robustness: Any,
-                    indices: Sequence[int]) -> list[Any]:
-    """Run some cases of a sweep (a task of :func:`harness.cosim.run_scenario` on workers).
-
-    Parameters
-    ----------
-    scenario : Scenario
-        The sweep scenario.
-    engine : {"fmu", "fast"}
-        Evaluation engine of the runs.
-    robustness : bool or str
-        As :func:`harness.evaluation.run_case` (map-error runs on the fast engine).
-    indices : sequence of int
-        Which cases of ``scenario.cases()``.
-
-    Returns
-    -------
-    list of ScenarioResult
-        In the order of ``indices``, time series dropped.
-    """
-    from .evaluation import run_case
-
-    session = _worker_session(engine, scenario)
-    if engine == "fast" or not robustness:
-        rs = session
-    else:
-        if not _FAST_SESSION:
-            _FAST_SESSION.append(_make_session("fast", None, 2))
-        rs = _FAST_SESSION[0]
-    cases = scenario.cases()
-    return [run_case(cases[i], session, keep_runs=False, robustness=robustness,
-                     robustness_session=rs) for i in indices]
+MapResult = WorkspaceMap
+"""The former name of :class:`WorkspaceMap`."""

@@ -19,19 +19,19 @@ claim     module                      paper
 ========  ==========================  =========================================
 
 A further claim plugs in the same way: a module whose ``run(settings)`` is
-decorated with :func:`register`, listed in :data:`CATALOGUE`.
+decorated with :func:`register`, listed in :data:`CATALOGUE` and imported by
+:mod:`harness.claims.registry`, which runs them.
 
 Examples
 --------
->>> from harness.claims import Settings, run_claims
+>>> from harness.claims import Settings
+>>> from harness.claims.registry import run_claims
 >>> results = run_claims(Settings(fast=True), only=[1])   # doctest: +SKIP
 >>> results[0].verdict                                     # doctest: +SKIP
 'PASSED'
 """
 
 from __future__ import annotations
-
-import importlib
 
 from .base import (
     Check,
@@ -40,9 +40,6 @@ from .base import (
     Settings,
     Table,
     register,
-    registered,
-    run_claim,
-    run_claims,
 )
 
 CATALOGUE: dict[int, tuple[str, str]] = {
@@ -54,13 +51,8 @@ CATALOGUE: dict[int, tuple[str, str]] = {
     6: ("vibration_filters", "Vibration filters compared: biquad, notch, ZV shaper"),
     7: ("djl_stages", "DJL stage filters against the moving mode"),
 }
-"""Claim number -> (module, title), readable without importing the (heavy) modules."""
-
-
-def _load_all() -> None:
-    """Import every claim module (each registers itself)."""
-    for name, _title in CATALOGUE.values():
-        importlib.import_module(f"{__name__}.{name}")
+"""Claim number -> (module, title), readable without importing the (heavy) modules
+(:mod:`harness.claims.registry` imports them and runs the claims)."""
 
 
 __all__ = [
@@ -71,7 +63,4 @@ __all__ = [
     "Settings",
     "Table",
     "register",
-    "registered",
-    "run_claim",
-    "run_claims",
 ]

@@ -21,19 +21,19 @@ Two kinds of checks are kept apart:
 
 from __future__ import annotations
 
-import time
-import traceback
-from collections.abc import Callable, Iterable, Sequence
+import sys
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
+from tqdm import tqdm
+
+from ..fmu.runner import Trajectory, generate
 
 if TYPE_CHECKING:  # pragma: no cover
-    from matplotlib.figure import Figure
-
-    from ..fmu.runner import Trajectory
+    from matplotlib.figure import Figure  # a type only: matplotlib is heavy to import
 
 CheckKind = Literal["product", "paper"]
 
@@ -256,8 +256,6 @@ class Settings:
 
     def generate(self, params: dict[str, Any], **kw: Any) -> Trajectory:
         """Run the generator FMU (through fmpy) with these settings."""
-        from ..fmu.runner import generate
-
         return generate(params, fmi_version=self.fmi_version, fmu=self.fmu, **kw)
 
     def pick(self, fast: Any, full: Any) -> Any:
@@ -267,12 +265,8 @@ class Settings:
     def progress_bar(self, iterable: Iterable[Any], desc: str, total: int | None = None
                      ) -> Iterable[Any]:
         """Wrap ``iterable`` in a tqdm bar when progress is on and stderr is a TTY."""
-        import sys
-
         if not self.progress or not sys.stderr.isatty():
             return iterable
-        from tqdm import tqdm
-
         return tqdm(iterable, desc=desc, total=total, leave=False)
 
 
@@ -301,48 +295,6 @@ def register(number: int, title: str) -> Callable[[ClaimFunction], ClaimFunction
         return fn
 
     return deco
-
-
-def registered() -> list[ClaimSpec]:
-    """Return the registered claims, by number."""
-    from . import _load_all
-
-    _load_all()
-    return [_REGISTRY[k] for k in sorted(_REGISTRY)]
-
-
-def run_claim(number: int, settings: Settings | None = None) -> ClaimResult:
-    """Run one claim; an exception becomes an ERROR result carrying the traceback."""
-    specs = {s.number: s for s in registered()}
-    if number not in specs:
-        raise KeyError(f"no claim {number}; available: {sorted(specs)}")
-    spec = specs[number]
-    settings = settings or Settings()
-    t0 = time.perf_counter()
-    try:
-        res = spec.run(settings)
-    except Exception:  # noqa: BLE001 - reported, never hidden
-        res = ClaimResult(number, spec.title, "", "", error=traceback.format_exc())
-    res.elapsed = time.perf_counter() - t0
-    return res
-
-
-def run_claims(settings: Settings | None = None, only: Sequence[int] | None = None,
-               on_result: Callable[[ClaimResult], None] | None = None) -> list[ClaimResult]:
-    """Run the registered claims (all, or those in ``only``) in order."""
-    numbers = [s.number for s in registered()]
-    if only is not None:
-        unknown = sorted(set(only) - set(numbers))
-        if unknown:
-            raise KeyError(f"no claim(s) {unknown}; available: {numbers}")
-        numbers = [n for n in numbers if n in set(only)]
-    out = []
-    for n in numbers:
-        res = run_claim(n, settings)
-        if on_result is not None:
-            on_result(res)
-        out.append(res)
-    return out
 
 
 def dress(ax, xlabel: str, ylabel: str, title: str | None = None) -> None:

@@ -10,7 +10,7 @@ residual vibration compared with JL tuned to the end of the motion.
 
 Product's side: the harness's embedded default scenarios X and Y
 (:mod:`harness.scenario`) run through its co-simulation
-(:class:`harness.cosim.Session`: two generator FMUs through fmpy, the Z axis
+(:class:`harness.simulation.session.Session`: two generator FMUs through fmpy, the Z axis
 moving the mode, the DJL jerk times tuned from the mode map by
 :mod:`harness.tuning`).  The Bode of the flexible axis at the Z position of
 each stage start is overlaid with that stage's moving-average notch.  The
@@ -30,6 +30,9 @@ from pathlib import Path
 import numpy as np
 
 from ..plant import Mode, free_amplitude, hermite_mid, simulate_mode
+from ..scenario import load_scenario
+from ..simulation.session import Session
+from ..tuning.tune import tune_profile
 from . import formulas as fm
 from .base import Check, ClaimResult, Settings, Table, register
 from .signals import db
@@ -251,9 +254,6 @@ def _f_mid(run, spec) -> np.ndarray:
 
 def analyse_scenario(settings: Settings, name: str) -> ScenarioStages:
     """Tune and co-simulate DJL and JL for one default scenario; split into stages."""
-    from ..cosim import Session
-    from ..scenario import load_scenario
-
     sc = load_scenario(name)
     if settings.fmu is not None or settings.fmi_version != sc.simulation.fmi_version:
         sc = sc.with_fmu(None if settings.fmu is None else Path(settings.fmu),
@@ -261,10 +261,10 @@ def analyse_scenario(settings: Settings, name: str) -> ScenarioStages:
     spec = sc.modemap.tuned
     i_mode = sc.modemap.tune
     with Session(sc.simulation.fmu, sc.simulation.fmi_version) as s:
-        tu = s.tune(sc, "DJL")
+        tu = tune_profile(s, sc, "DJL")
         run = s.run(sc, "DJL", tu.T_F)
         mv = s.axis.sample(Session.move_params(sc, "DJL", tu.T_F), t_stop=float(run.t[-1]))
-        tj = s.tune(sc, "JL")
+        tj = tune_profile(s, sc, "JL")
         run_jl = s.run(sc, "JL", tj.T_F)
         mv_jl = s.axis.sample(Session.move_params(sc, "JL", tj.T_F), t_stop=float(run_jl.t[-1]))
     if abs(run.step - sc.simulation.Te) > 1e-15:
@@ -371,7 +371,8 @@ def run(settings: Settings) -> ClaimResult:
              enumerate(zip(sc.instants, sc.z, sc.periods, sc.T_F, strict=True))]))
     method = (
         "The harness's default scenarios X and Y (embedded TOML) are tuned and co-simulated "
-        "with harness.cosim.Session (generator FMUs through fmpy, Z axis moving the mode). "
+        "with harness.simulation.session.Session (generator FMUs through fmpy, Z axis moving "
+        "the mode). "
         "Bode: (q+eps)/q = (2 zeta w s + w^2)/(s^2 + 2 zeta w s + w^2) at the mode frequency of "
         "each stage start, with |F_i| = |sinc(f T_Fi)|. Stage residuals: the DJL (and JL) "
         "acceleration is split into its four filtered steps (eq. 11, Fig. 7: each step of "

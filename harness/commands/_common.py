@@ -1,28 +1,186 @@
 """What the commands (``simulate``, ``compare``, ``map``, ``tune``...) share.
 
-They check every input before running anything, refuse a non-finite result, and
-write their outputs only once every run has succeeded, as one set that replaces
-the previous one whole (:func:`write_outputs`, :mod:`harness.commands._outputs`).
+Their options, spelt and explained once (``add_*_option``: the scenario, the
+FMU, the engine, ``--tuning``, the parallel options, ``-o/--out``); every
+command checks every input before running anything, refuses a non-finite
+result, reports a failure by raising :class:`~harness.errors.CommandError`,
+and writes its outputs only once every run has succeeded, as one set that
+replaces the previous one whole (:func:`write_outputs`, :mod:`harness.files`).
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import functools
+import math
+import multiprocessing
+import os
 import re
+import tempfile
 from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
-from ._outputs import OutputSet, Terminated, sigterm_raises
+from ..errors import CommandError
+from ..files import OutputSet, Terminated, sigterm_raises
+from ..scenario import ScenarioError, load_scenario
+from ..tuning.methods import DJL_METHODS, JL_METHODS, variants_of
+from ..tuning.methods import parse_tuning as parse_tuning_pairs
+from ..uncertainty import check_map_error
+
+__all__ = ["CommandError", "add_engine_option", "add_fmu_options", "add_map_error_option",
+           "add_out_option", "add_parallel_options", "add_quiet_option", "add_tuning_option",
+           "check_map_error_option", "load_scenarios", "parse_tuning", "write_outputs"]
+
+OUT_ROOT = Path("djl-fmu-out")
+"""Where the commands write by default: ``./djl-fmu-out/<command>``."""
 
 
-class CommandError(Exception):
-    """A command stops: ``status`` is its exit status, the message says why."""
+# ------------------------------------------------------------------ options
 
-    def __init__(self, status: int, message: str) -> None:
-        super().__init__(message)
-        self.status = status
+
+def add_out_option(p: argparse.ArgumentParser, command: str, *, kind: str = "dir",
+                   default: Path | None = None, required: bool = False) -> None:
+    """Add the one output option of every command: ``-o/--out``.
+
+    Parameters
+    ----------
+    p : ArgumentParser
+        The command's parser.
+    command : str
+        Its name (the default folder is ``./djl-fmu-out/<command>``).
+    kind : {"dir", "file"}
+        A folder of outputs, or one file (``build``'s FMU, ``report``'s HTML).
+    default : Path, optional
+        Another default.
+    required : bool
+        No default: the user names it.
+
+    Notes
+    -----
+    ``--output`` is accepted as another spelling (the earlier one of ``build``
+    and ``report``), and not shown.
+    """
+    dflt = None if required else (default if default is not None else OUT_ROOT / command)
+    meta = "DIR" if kind == "dir" else "PATH"
+    what = "output folder" if kind == "dir" else "the file to write"
+    help_ = what if required else f"{what} (default: ./{dflt})"
+    p.add_argument("-o", "--out", "--output", dest="out", type=Path, default=dflt,
+                   required=required, metavar=meta, help=help_)
+
+
+def add_scenarios_argument(p: argparse.ArgumentParser, default: str) -> None:
+    """Add the scenarios of a command: TOML files or embedded names, ``default`` when none."""
+    p.add_argument("scenarios", nargs="*", metavar="SCENARIO",
+                   help=f"TOML scenario file or embedded scenario name (default: {default}; "
+                        "'djl-fmu simulate --list' lists the embedded ones; format: "
+                        "docs/harness.md)")
+
+
+def add_fmu_options(p: argparse.ArgumentParser, what: str = "with the same variables") -> None:
+    """``--fmi-version`` and ``--fmu``: which generator FMU the command runs."""
+    p.add_argument("--fmi-version", type=int, choices=(2, 3), default=None,
+                   help="use the package's FMI 2.0 or 3.0 FMU (default: the scenario's, "
+                        "which defaults to 2)")
+    p.add_argument("--fmu", type=Path, default=None, metavar="PATH",
+                   help=f"a generator FMU file {what} (overrides the scenario's)")
+
+
+def add_engine_option(p: argparse.ArgumentParser, default: str | None,
+                      default_text: str) -> None:
+    """``--engine {fmu,fast}``: the generator FMUs through fmpy, or the compiled engine."""
+    p.add_argument("--engine", choices=("fmu", "fast"), default=default,
+                   help="fmu: the generator FMUs stepped through fmpy (the reference); fast: "
+                        "the same generator core and plant compiled, called once per move "
+                        f"(default: {default_text})")
+
+
+TUNING_GRAMMAR = ("comma-separated METHOD, djl=METHOD or jl=METHOD; DJL methods: "
+                  + ", ".join(DJL_METHODS) + "; JL methods: " + ", ".join(JL_METHODS)
+                  + " (a bare method is DJL's, 'end' JL's)")
+"""The one grammar of ``--tuning`` (:func:`harness.tuning.methods.parse_tuning`)."""
+
+
+def add_tuning_option(p: argparse.ArgumentParser, use: str) -> None:
+    """``--tuning LIST``: one grammar; ``use`` says what the command does with the methods.
+
+    Parameters
+    ----------
+    use : {"add", "pick"}
+        ``add``: each method adds a profile tuned by it (simulate, map);
+        ``pick``: the methods of the table's DJL and JL columns (tune).
+    """
+    if use == "add":
+        text = ("add profiles tuned by these methods: " + TUNING_GRAMMAR + ". DJL 'optimal': "
+                "least residual on the time-varying model, never worse than JL; 'robust': "
+                "least worst case over the map error; 'paper': the paper's rule, what DJL uses "
+                "by default. E.g. --tuning optimal,robust adds the profiles DJL-optimal and "
+                "DJL-robust")
+    else:
+        text = ("the methods of the table, at most one per profile: " + TUNING_GRAMMAR
+                + " (default: DJL robust, JL end)")
+    p.add_argument("--tuning", default=None, metavar="LIST", help=text)
+
+
+def add_map_error_option(p: argparse.ArgumentParser, what: str) -> None:
+    """``--map-error E``: the relative error of the whole mode map, in [0, 1)."""
+    p.add_argument("--map-error", type=float, default=None, metavar="E",
+                   help=f"{what}: the whole mode map f(z) off by up to +/-E, E in [0, 1) "
+                        "(default: the scenario's map_error, 0.1)")
+
+
+def add_parallel_options(p: argparse.ArgumentParser, what: str = "moves",
+                         max_moves: str | None = "run only the first N moves of the grid"
+                         ) -> None:
+    """``--workers``, ``--scheduler`` (and ``--max-moves``): where and how much runs."""
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help=f"run the {what} on N local processes (default: one per core; 1 runs "
+                        "in this process)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run on a Dask cluster: the scheduler's address, e.g. "
+                        "tcp://10.0.0.5:8786")
+    if max_moves is not None:
+        p.add_argument("--max-moves", type=int, default=None, metavar="N", help=max_moves)
+
+
+def add_quiet_option(p: argparse.ArgumentParser, plots: str | None = "the PNG figures") -> None:
+    """``-q/--quiet`` (and ``--no-plot`` when the command draws figures)."""
+    if plots is not None:
+        p.add_argument("--no-plot", action="store_true", help=f"do not write {plots}")
+    p.add_argument("-q", "--quiet", action="store_true",
+                   help="no progress bar, do not print the tables")
+
+
+def parse_tuning(text: str | None) -> list[str]:
+    """Profile variants that ``--tuning`` adds (``"optimal,robust"`` → DJL-optimal, DJL-robust).
+
+    Raises
+    ------
+    CommandError
+        With status 2 for an unknown method.
+    """
+    try:
+        return variants_of(parse_tuning_pairs(text))
+    except ValueError as e:
+        raise CommandError(2, f"--tuning {text!r}: {e}") from None
+
+
+def check_map_error_option(map_error: float | None) -> float | None:
+    """Check ``--map-error`` (None: not given).
+
+    Raises
+    ------
+    CommandError
+        With status 2 when it is not in [0, 1).
+    """
+    if map_error is None:
+        return None
+    try:
+        return check_map_error(map_error, "--map-error")
+    except ValueError as e:
+        raise CommandError(2, f"{e} (0.1 = +/-10 %)") from None
 
 
 def safe_stem(name: str) -> str:
@@ -40,8 +198,6 @@ def load_scenarios(names: Sequence[str], fmu: Path | None, fmi_version: int | No
         With status 2, on a bad scenario, two scenarios of the same name, or an
         output path that is not a folder or cannot be written.
     """
-    from ..scenario import ScenarioError, load_scenario
-
     try:
         scenarios = [load_scenario(n) for n in names]
         if fmu is not None or fmi_version is not None:
@@ -62,9 +218,6 @@ def _nearest_existing(path: Path) -> Path:
 
 def _writable_dir(d: Path) -> bool:
     """Return True if a file can be created in the existing folder ``d`` (tried, removed)."""
-    import os
-    import tempfile
-
     if not os.access(d, os.W_OK | os.X_OK):
         return False
     try:
@@ -95,7 +248,7 @@ def check_out_dir(out: Path, option: str = "--out") -> None:
         raise CommandError(2, f"{option} {out}: {base} is not writable")
 
 
-def check_out_file(path: Path, option: str = "-o") -> None:
+def check_out_file(path: Path, option: str = "--out") -> None:
     """Refuse an output file that cannot be written, before anything runs.
 
     Raises
@@ -109,8 +262,6 @@ def check_out_file(path: Path, option: str = "-o") -> None:
         raise CommandError(2, f"{option} {path} is an existing directory, not a file")
     if path.exists() and not path.is_file():
         raise CommandError(2, f"{option} {path} exists and is not a regular file")
-    import os
-
     if path.exists() and not os.access(path, os.W_OK):
         raise CommandError(2, f"{option} {path}: the file is not writable")
     base = _nearest_existing(path.parent)
@@ -138,8 +289,6 @@ def check_finite(name: str, result: Any) -> None:
     CommandError
         Status 1, naming the scenario, the profile and the column.
     """
-    import math
-
     rows = result.rows() if hasattr(result, "rows") else []
     for row in rows:
         for k, v in row.items():
@@ -182,7 +331,7 @@ def write_outputs(out: Path, write: Callable[[OutputSet], None], summary: str) -
 
     ``write`` writes each file at ``o.path(name)`` of the :class:`OutputSet` it
     is given (a staging folder in ``out``); once it returns, the whole set
-    replaces the previous one in a single pass (:mod:`harness.commands._outputs`):
+    replaces the previous one in a single pass (:mod:`harness.files`):
     an error or an interruption at any point leaves the previous files as they
     were, and no temporary folder.
 
@@ -251,8 +400,6 @@ def check_rows_finite(rows: Sequence[Mapping[str, Any]], what: str, *,
     CommandError
         Status 1, naming the column, the row (1-based) and its keys.
     """
-    import math
-
     for i, row in enumerate(rows):
         for cols, bad in ((finite, lambda v: not math.isfinite(v)),
                           (no_inf, math.isinf)):
@@ -292,9 +439,6 @@ def run_forked(tasks: Sequence[Callable[[], Any]], workers: int | None = None
     results is pickled); an exception comes back as ``(False, "Type: message")``.
     Where ``fork`` is not available, or for a single task, they run here.
     """
-    import multiprocessing
-    import os
-
     tasks = list(tasks)
     n = min(len(tasks), workers or os.cpu_count() or 1)
     if n <= 1 or "fork" not in multiprocessing.get_all_start_methods():
@@ -303,8 +447,6 @@ def run_forked(tasks: Sequence[Callable[[], Any]], workers: int | None = None
             return [_call(i) for i in range(len(tasks))]
         finally:
             _TASKS.clear()
-    from concurrent.futures import ProcessPoolExecutor
-
     _TASKS[:] = tasks
     try:
         with ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("fork")) as pool:
@@ -313,53 +455,10 @@ def run_forked(tasks: Sequence[Callable[[], Any]], workers: int | None = None
         _TASKS.clear()
 
 
-TUNING_HELP = (
-    "add profiles tuned by other methods, comma-separated: DJL 'optimal' (least residual on "
-    "the time-varying model, never worse than JL), 'robust' (least worst case over the map "
-    "error), 'paper' (the paper's rule, what DJL uses by default); 'jl=optimal' for JL. "
-    "E.g. --tuning optimal,robust adds the profiles DJL-optimal and DJL-robust")
-
-
-def parse_tuning(text: str | None) -> list[str]:
-    """Profile variants named by ``--tuning`` (e.g. ``"optimal,robust"`` → DJL-optimal, DJL-robust).
-
-    Raises
-    ------
-    CommandError
-        With status 2 for an unknown method.
-    """
-    from ..optimize import DJL_METHODS, JL_METHODS
-
-    if not text:
-        return []
-    out: list[str] = []
-    for item in (x.strip() for x in text.split(",")):
-        if not item:
-            continue
-        prof, _, method = item.partition("=")
-        if not method:
-            prof, method = "djl", prof
-        prof = prof.strip().upper()
-        method = method.strip().lower()
-        allowed = {"DJL": DJL_METHODS, "JL": JL_METHODS}.get(prof)
-        if allowed is None or method not in allowed:
-            raise CommandError(2, f"--tuning {text!r}: {item!r} is not a tuning method (DJL: "
-                                  f"{', '.join(DJL_METHODS)}; JL: jl={', jl='.join(JL_METHODS)})")
-        if (prof, method) in (("JL", "end"),):
-            continue  # JL's own method
-        name = f"{prof}-{method}"
-        if name not in out:
-            out.append(name)
-    return out
-
-
 def apply_tuning(scenarios: Sequence[Any], variants: Sequence[str],
                  map_error: float | None) -> list[Any]:
     """Add the tuned profile variants and the robust method's map error to every scenario."""
-    import dataclasses
-
-    if map_error is not None and not (0.0 <= map_error < 1.0):
-        raise CommandError(2, f"--map-error {map_error!r}: must be in [0, 1) (0.1 = +/-10 %)")
+    map_error = check_map_error_option(map_error)
     out = []
     for sc in scenarios:
         cmp = sc.compare

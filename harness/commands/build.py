@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
-from ._common import interruptible
+from ..files import OutputSet
+from ..fmu.build import BuildError, build_fmu, resolve_platforms
+from ._common import CommandError, add_out_option, interruptible
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -25,8 +26,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--fmi-version", type=int, choices=(2, 3), required=True,
                    help="FMI version of the FMU")
-    p.add_argument("-o", "--output", type=Path, required=True, metavar="PATH",
-                   help="the .fmu file to write")
+    add_out_option(p, "build", kind="file", required=True)
     p.add_argument("--platforms", default="all", metavar="host|all|LIST",
                    help="platforms to carry binaries for: all (default), host (this "
                         "machine's), or a comma-separated list of FMI 3 platform tuples, "
@@ -41,11 +41,12 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Build, validate, report."""
-    from ..fmu.build import BuildError, build_fmu, resolve_platforms
-    from ._outputs import OutputSet
+    """Build, validate, report.
 
-    out: Path = args.output
+    A :class:`~harness.errors.CommandError` it raises is reported by
+    :func:`harness.cli.main` (message and exit status).
+    """
+    out: Path = args.out
     try:
         # built next to the destination, then renamed over it: never a partial file
         with OutputSet(out.parent) as o:
@@ -53,20 +54,16 @@ def run(args: argparse.Namespace) -> int:
                       cc=args.cc)
             (path,) = o.commit()
     except BuildError as e:
-        print(f"djl-fmu build: {e}", file=sys.stderr)
-        return 1
+        raise CommandError(1, str(e)) from None
     except OSError as e:
-        print(f"djl-fmu build: cannot write {args.output}: {e.strerror or e}", file=sys.stderr)
-        return 1
+        raise CommandError(1, f"cannot write {out}: {e.strerror or e}") from None
     if not args.no_validate:
-        from fmpy.validation import validate_fmu
+        from fmpy.validation import validate_fmu  # deferred: fmpy is heavy to import
 
         problems = validate_fmu(str(path))
         if problems:
-            print(f"djl-fmu build: {path} does not validate:", file=sys.stderr)
-            for prob in problems:
-                print(f"  - {prob}", file=sys.stderr)
-            return 1
+            raise CommandError(1, f"{path} does not validate:\n"
+                                  + "\n".join(f"  - {prob}" for prob in problems))
     names = ", ".join(resolve_platforms(args.platforms))
     print(f"wrote {path} (FMI {args.fmi_version}.0 co-simulation, validated; binaries for "
           f"{names})")

@@ -5,12 +5,31 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
 
-from ._common import interruptible
+from tqdm import tqdm
 
-if TYPE_CHECKING:
-    from ._outputs import OutputSet
+from ..files import OutputSet, save_figure, write_csv
+from ..fmu.runner import FMUError
+from ..peers.compare import ALL_PEERS, PEERS, compare_scenario, stationary_variant
+from ..peers.ruckig_ref import ruckig_available
+from ..peers.timeopt import measure
+from ._common import (
+    CommandError,
+    add_engine_option,
+    add_fmu_options,
+    add_map_error_option,
+    add_out_option,
+    add_quiet_option,
+    add_scenarios_argument,
+    apply_tuning,
+    check_rows_finite,
+    check_stems,
+    interruptible,
+    load_scenarios,
+    report_written,
+    safe_stem,
+    write_outputs,
+)
 
 DESCRIPTION = """\
 Answer "which law ends the motion soonest with the vibration inside my
@@ -108,10 +127,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("scenarios", nargs="*", metavar="SCENARIO",
-                   help="TOML scenario file or embedded scenario name (default: X Y)")
-    p.add_argument("-o", "--out", type=Path, default=Path("djl-fmu-out") / "compare",
-                   metavar="DIR", help="output folder (default: ./djl-fmu-out/compare)")
+    add_scenarios_argument(p, "X Y; single moves")
+    add_out_option(p, "compare")
     p.add_argument("--no-stationary", action="store_true",
                    help="do not add the stationary-mode variant of each scenario")
     p.add_argument("--peers", default=None, metavar="LIST",
@@ -123,42 +140,19 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--timeopt", type=int, default=30, metavar="N",
                    help="random moves per case for the FIR-JL/DJL vs time-optimal "
                         "measurement (default 30; 0 to skip)")
-    p.add_argument("--fmi-version", type=int, choices=(2, 3), default=None,
-                   help="use the package's FMI 2.0 or 3.0 FMU (default: the scenario's)")
-    p.add_argument("--fmu", type=Path, default=None, metavar="PATH",
-                   help="a generator FMU file with the same variables (overrides the "
-                        "scenario's)")
-    p.add_argument("--engine", choices=("fmu", "fast"), default="fmu",
-                   help="fmu (default): the generator FMUs stepped through fmpy (the "
-                        "reference); fast: the same generator core and plant compiled, called "
-                        "once per move")
-    p.add_argument("--map-error", type=float, default=None, metavar="E",
-                   help="uncertainty of the robust DJL's tuning: the whole mode map off by up to "
-                        "+/-E (default: the scenario's map_error, 0.1)")
-    p.add_argument("--no-plot", action="store_true", help="do not write the PNG figures")
-    p.add_argument("-q", "--quiet", action="store_true", help="do not print the tables")
+    add_fmu_options(p)
+    add_engine_option(p, "fmu", "fmu")
+    add_map_error_option(p, "uncertainty of the robust DJL's tuning")
+    add_quiet_option(p)
     p.set_defaults(func=interruptible(run))
 
 
 def run(args: argparse.Namespace) -> int:
     """Check the inputs, run every comparison, then write the outputs; return the exit status.
 
-    A :class:`~harness.commands._common.CommandError` it raises is reported by
+    A :class:`~harness.errors.CommandError` it raises is reported by
     :func:`harness.cli.main` (message and exit status).
     """
-    from ..peers.compare import ALL_PEERS, PEERS, stationary_variant
-    from ..peers.ruckig_ref import ruckig_available
-    from ._common import (
-        CommandError,
-        apply_tuning,
-        check_rows_finite,
-        check_stems,
-        load_scenarios,
-        report_written,
-        safe_stem,
-        write_outputs,
-    )
-
     # 1. check everything first
     if not ruckig_available():
         raise CommandError(2, "needs the 'ruckig' package for the time-optimal reference: "
@@ -185,15 +179,9 @@ def run(args: argparse.Namespace) -> int:
     stems = [safe_stem(s.name) for s in scenarios]
 
     # 2. run (nothing written yet)
-    import matplotlib
+    import matplotlib  # deferred: matplotlib is heavy to import
 
     matplotlib.use("Agg")
-    from tqdm import tqdm
-
-    from ..fmu.runner import FMUError
-    from ..peers.compare import compare_scenario
-    from ..peers.timeopt import measure
-    from ..results import save_figure, write_csv
 
     show = not args.quiet and sys.stderr.isatty()
     results = []

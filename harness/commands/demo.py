@@ -3,16 +3,14 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ._common import interruptible
-
-if TYPE_CHECKING:
-    from ._outputs import OutputSet
+from ..files import OutputSet
+from ..fmu.build import BuildError, build_fmu, check_compiler
+from ..fmu.runner import generate
+from ._common import OUT_ROOT, CommandError, add_out_option, add_quiet_option, interruptible
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -27,50 +25,42 @@ def register(sub: argparse._SubParsersAction) -> None:
             "fmpy with both, compare them, and plot the profile against AL and JL."
         ),
     )
-    p.add_argument("--out", type=Path, default=Path("djl-fmu-out"), metavar="DIR",
-                   help="output folder (default: ./djl-fmu-out)")
-    p.add_argument("--no-plot", action="store_true", help="do not write the PNG")
+    add_out_option(p, "demo", default=OUT_ROOT)
+    add_quiet_option(p, "the PNG")
     p.set_defaults(func=interruptible(run))
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the demo; non-zero exit if a check fails.
 
-    The FMUs and the figure are written as one set (:class:`~harness.commands._outputs.
-    OutputSet`): built and checked in a staging folder in OUT, then swapped in together.
+    The FMUs and the figure are written as one set (:class:`~harness.files.OutputSet`):
+    built and checked in a staging folder in OUT, then swapped in together.  A
+    :class:`~harness.errors.CommandError` it raises is reported by
+    :func:`harness.cli.main` (message and exit status).
     """
-    from ..fmu.build import BuildError, check_compiler
-    from ._outputs import OutputSet
-
     out: Path = args.out
     try:
         check_compiler()  # before writing anything
     except BuildError as e:
-        print(f"djl-fmu demo: {e}", file=sys.stderr)
-        return 1
+        raise CommandError(1, str(e)) from None
     if out.exists() and not out.is_dir():
-        print(f"djl-fmu demo: --out {out} exists and is not a directory", file=sys.stderr)
-        return 2
+        raise CommandError(2, f"--out {out} exists and is not a directory")
     try:
         with OutputSet(out) as o:
-            ok = _demo(o, args.no_plot)
+            ok = _demo(o, args.no_plot, args.quiet)
             o.commit()
     except (BuildError, OSError) as e:
-        print(f"djl-fmu demo: cannot write the outputs in {out}: {e}", file=sys.stderr)
-        return 1
+        raise CommandError(1, f"cannot write the outputs in {out}: {e}") from None
     if not ok:
-        print("djl-fmu demo: a check failed (see above)", file=sys.stderr)
-        return 1
+        raise CommandError(1, "a check failed (see above)")
     return 0
 
 
-def _demo(o: OutputSet, no_plot: bool) -> bool:
+def _demo(o: OutputSet, no_plot: bool, quiet: bool = False) -> bool:
     """Build, validate and run the FMUs, draw the figure, all in ``o``; True if all passed."""
-    from fmpy.validation import validate_fmu
+    from fmpy.validation import validate_fmu  # deferred: fmpy is heavy to import
 
-    from ..fmu.build import build_fmu
-    from ..fmu.runner import generate
-
+    say = (lambda *a, **k: None) if quiet else print
     ok = True
     fmus = {}
     for v in (2, 3):
@@ -80,7 +70,7 @@ def _demo(o: OutputSet, no_plot: bool) -> bool:
         problems = validate_fmu(str(fmus[v]))
         status = "valid" if not problems else "INVALID: " + "; ".join(problems)
         ok &= not problems
-        print(f"FMU (FMI {v}.0): {o.final(f'JerkLimitedTrajectory-fmi{v}.fmu')} [{status}]")
+        say(f"FMU (FMI {v}.0): {o.final(f'JerkLimitedTrajectory-fmi{v}.fmu')} [{status}]")
 
     tr = {v: generate(fmu=fmus[v]) for v in (2, 3)}
     d = tr[2]
@@ -93,23 +83,23 @@ def _demo(o: OutputSet, no_plot: bool) -> bool:
     k_end = int(np.argmax(d.done))
     err_x = d.x[k_end] - (p["x0"] + p["distance"])
     jerk = d.j
-    print()
-    print("Default DJL move (FMU start values):")
-    print(f"  d = {p['distance']} m, v_max = {p['v_max']} m/s, a_max = {p['a_max']} m/s2, "
+    say()
+    say("Default DJL move (FMU start values):")
+    say(f"  d = {p['distance']} m, v_max = {p['v_max']} m/s, a_max = {p['a_max']} m/s2, "
           f"d_max = {p['d_max']} m/s2, Te = {p['Te'] * 1e3:g} ms")
-    print("  jerk times T_F1..T_F4 = " + "/".join(f"{p[f'T_F{i}'] * 1e3:g}" for i in range(1, 5))
+    say("  jerk times T_F1..T_F4 = " + "/".join(f"{p[f'T_F{i}'] * 1e3:g}" for i in range(1, 5))
           + " ms -> " + "/".join(str(n) for n in d.N_F) + " samples")
-    print(f"  motion time        {d.motion_time:.4f} s   (AL {al.motion_time:.4f} s, "
+    say(f"  motion time        {d.motion_time:.4f} s   (AL {al.motion_time:.4f} s, "
           f"JL with T_F = {p['T_F1'] * 1e3:g} ms {jl.motion_time:.4f} s)")
-    print(f"  end position error {err_x:.3g} m at t = {d.t[k_end]:.4f} s (done), "
+    say(f"  end position error {err_x:.3g} m at t = {d.t[k_end]:.4f} s (done), "
           f"end velocity {d.v[k_end]:.3g} m/s, end acceleration {d.a[k_end]:.3g} m/s2")
-    print(f"  peak |v| {np.abs(d.v).max():.6g} m/s, a in [{d.a.min():.6g}, {d.a.max():.6g}] "
+    say(f"  peak |v| {np.abs(d.v).max():.6g} m/s, a in [{d.a.min():.6g}, {d.a.max():.6g}] "
           f"m/s2, |j| <= {np.abs(jerk).max():.6g} m/s3")
-    print(f"  FMI 2.0 and FMI 3.0 outputs identical: {'yes' if same else 'NO'} "
+    say(f"  FMI 2.0 and FMI 3.0 outputs identical: {'yes' if same else 'NO'} "
           f"({len(d.t)} samples)")
     ok &= abs(err_x) <= 1e-9 * abs(p["distance"])
     if not no_plot:
-        import matplotlib
+        import matplotlib  # deferred: matplotlib is heavy to import
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
@@ -120,5 +110,5 @@ def _demo(o: OutputSet, no_plot: bool) -> bool:
         fig.axes[2].legend(loc="lower right", fontsize="small")
         fig.savefig(o.path("demo_djl.png"), dpi=110)
         plt.close(fig)
-        print(f"  plot: {o.final('demo_djl.png')}")
+        say(f"  plot: {o.final('demo_djl.png')}")
     return bool(ok)

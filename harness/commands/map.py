@@ -3,13 +3,28 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
-from typing import TYPE_CHECKING
 
-from ._common import TUNING_HELP, interruptible
-
-if TYPE_CHECKING:
-    from ._outputs import OutputSet
+from ..executors import ExecutorError, make_executor
+from ..files import OutputSet, save_figure
+from ..fmu.runner import FMUError
+from ..workspace import WorkspaceMapError, check_engine, run_workspace_map
+from ._common import (
+    CommandError,
+    add_engine_option,
+    add_map_error_option,
+    add_out_option,
+    add_parallel_options,
+    add_quiet_option,
+    add_tuning_option,
+    apply_tuning,
+    check_parallel_options,
+    check_rows_finite,
+    interruptible,
+    load_scenarios,
+    parse_tuning,
+    report_written,
+    write_outputs,
+)
 
 DESCRIPTION = """\
 Map the workspace: run every move of a grid and measure, for each compared
@@ -88,49 +103,21 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("scenario", metavar="SCENARIO",
                    help="TOML scenario file with a [map] table, or an embedded scenario "
                         "name (X, Y)")
-    p.add_argument("-o", "--out", type=Path, default=Path("djl-fmu-out") / "map",
-                   metavar="DIR", help="output folder (default: ./djl-fmu-out/map)")
-    p.add_argument("--workers", type=int, default=None, metavar="N",
-                   help="local worker processes (default: one per core; 1 runs in this "
-                        "process)")
-    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="run on a Dask cluster: the scheduler's address, e.g. "
-                        "tcp://10.0.0.5:8786")
-    p.add_argument("--max-moves", type=int, default=None, metavar="N",
-                   help="run only the first N moves of the grid")
-    p.add_argument("--engine", choices=("fast", "fmu"), default="fast",
-                   help="evaluation engine: 'fast' (compiled, default) or 'fmu' (the "
-                        "generator FMUs through fmpy)")
-    p.add_argument("--tuning", default=None, metavar="LIST", help=TUNING_HELP)
-    p.add_argument("--map-error", type=float, default=None, metavar="E",
-                   help="uncertainty of the 'robust' tuning: the whole mode map off by up to +/-E "
-                        "(default: the scenario's map_error, 0.1)")
-    p.add_argument("--no-plot", action="store_true", help="do not write the PNG heat maps")
-    p.add_argument("-q", "--quiet", action="store_true",
-                   help="no progress bar, do not print the summary")
+    add_out_option(p, "map")
+    add_parallel_options(p)
+    add_engine_option(p, "fast", "fast")
+    add_tuning_option(p, "add")
+    add_map_error_option(p, "uncertainty of the 'robust' tuning")
+    add_quiet_option(p, "the PNG heat maps")
     p.set_defaults(func=interruptible(run))
 
 
 def run(args: argparse.Namespace) -> int:
     """Check the inputs, run the map, then write the outputs; return the exit status.
 
-    A :class:`~harness.commands._common.CommandError` it raises is reported by
+    A :class:`~harness.errors.CommandError` it raises is reported by
     :func:`harness.cli.main` (message and exit status).
     """
-    from ..executors import ExecutorError, make_executor
-    from ..fmu.runner import FMUError
-    from ..workspace import MapError, check_engine, run_map
-    from ._common import (
-        CommandError,
-        apply_tuning,
-        check_parallel_options,
-        check_rows_finite,
-        load_scenarios,
-        parse_tuning,
-        report_written,
-        write_outputs,
-    )
-
     # 1. check everything before running anything
     check_parallel_options(args.workers, args.scheduler, args.max_moves)
     (sc,), (stem,) = load_scenarios([args.scenario], None, None, args.out)
@@ -143,19 +130,18 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as e:
         raise CommandError(2, f"--engine {args.engine}: {e}") from None
 
-    import matplotlib
+    import matplotlib  # deferred: matplotlib is heavy to import
 
     matplotlib.use("Agg")
-    from ..results import save_figure
 
     # 2. run (nothing is written yet); the executor is set up first, so that a bad
     #    scheduler address is reported as a bad option
     try:
         with make_executor(args.workers, args.scheduler) as ex:
             try:
-                res = run_map(sc, engine=args.engine, max_moves=args.max_moves,
+                res = run_workspace_map(sc, engine=args.engine, max_moves=args.max_moves,
                               progress=not args.quiet, executor=ex)
-            except (MapError, FMUError, ValueError, OSError) as e:
+            except (WorkspaceMapError, FMUError, ValueError, OSError) as e:
                 raise CommandError(1, f"map failed ({sc.name}): {e}") from None
     except ExecutorError as e:
         raise CommandError(2, str(e)) from None

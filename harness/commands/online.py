@@ -4,15 +4,34 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import TYPE_CHECKING
 
-from ._common import interruptible
-
-if TYPE_CHECKING:
-    from ._outputs import OutputSet
+from ..files import OutputSet, save_figure, write_csv
+from ..fmu.runner import FMUError, check_fmu_archive
+from ..online import (
+    COMMANDED_VARIABLES,
+    format_online,
+    jerk_source_values,
+    online_rows,
+    run_online,
+)
+from ..simulation.axis import samples_per_step
+from ..simulation.session import Session
+from ..tuning.methods import DJL_METHODS
+from ._common import (
+    CommandError,
+    add_fmu_options,
+    add_out_option,
+    add_quiet_option,
+    add_scenarios_argument,
+    check_rows_finite,
+    interruptible,
+    load_scenarios,
+    report_written,
+    write_outputs,
+)
 
 DESCRIPTION = """\
-Co-simulate the commanded generator FMU (issue #12) with its jerk times taken
+Co-simulate the commanded generator FMU  with its jerk times taken
 from the input f_mode. The master sets f_mode at every communication step to
 the tuned mode's frequency at the Z generator's current position (the mode map
 of the scenario): the paper's DJL rule (the modal period at the start of each
@@ -83,20 +102,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "online",
         help="DJL with f_mode given to the FMU online from the mode map at the current Z "
-             "position, against the offline-tuned DJL (issue #12)",
+             "position, against the offline-tuned DJL ",
         description=DESCRIPTION,
         epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("scenarios", nargs="*", metavar="SCENARIO",
-                   help="single-move TOML scenario file or embedded scenario name (default: X)")
-    p.add_argument("-o", "--out", type=Path, default=Path("djl-fmu-out") / "online",
-                   metavar="DIR", help="output folder (default: ./djl-fmu-out/online)")
-    p.add_argument("--fmi-version", type=int, choices=(2, 3), default=None,
-                   help="use the package's FMI 2.0 or 3.0 FMU (default: the scenario's)")
-    p.add_argument("--fmu", type=Path, default=None, metavar="PATH",
-                   help="a generator FMU file with the commanded interface (overrides the "
-                        "scenario's)")
+    add_scenarios_argument(p, "X; a single move")
+    add_out_option(p, "online")
+    add_fmu_options(p, "with the commanded interface")
     p.add_argument("--step", type=float, default=None, metavar="S",
                    help="communication step in s, a whole multiple of Te (default: the "
                         "scenario's; the stages are measured only when it is Te)")
@@ -106,27 +119,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--jerk-source", choices=("3", "2", "both"), default="3",
                    help="the FMU's jerk_source online: 3 (f_mode_ahead, f_mode extrapolated to "
                         "each stage's start; default), 2 (f_mode as read) or both side by side")
-    p.add_argument("--no-plot", action="store_true", help="do not write the PNG figures")
-    p.add_argument("-q", "--quiet", action="store_true", help="do not print the tables")
+    add_quiet_option(p)
     p.set_defaults(func=interruptible(run))
 
 
 def run(args: argparse.Namespace) -> int:
     """Check the scenarios, run them, then write the outputs; return the exit status."""
-    import math
-
-    from ..cosim import Session
-    from ..fmu.runner import FMUError
-    from ..online import COMMANDED_VARIABLES, format_online, online_rows, run_online
-    from ..optimize import DJL_METHODS
-    from ._common import (
-        CommandError,
-        check_rows_finite,
-        load_scenarios,
-        report_written,
-        write_outputs,
-    )
-
     # 1. check everything before running anything
     scenarios, stems = load_scenarios(args.scenarios or ["X"], args.fmu, args.fmi_version,
                                       args.out)
@@ -139,16 +137,16 @@ def run(args: argparse.Namespace) -> int:
             raise CommandError(2, f"{sc.name}: a sweep; the online co-simulation runs single "
                                   f"moves (e.g. X, Y, or a file without [sweep])")
         if args.step is not None:
-            r = args.step / sc.simulation.Te
-            if not (math.isfinite(r) and round(r) >= 1 and abs(r - round(r)) <= 1e-9 * r):
-                raise CommandError(2, f"--step {args.step!r}: not a whole multiple of Te = "
-                                      f"{sc.simulation.Te:g} s ({sc.name})")
+            try:
+                samples_per_step(args.step, sc.simulation.Te, f"{sc.name} generator")
+            except ValueError as e:
+                raise CommandError(2, f"--step {args.step!r}: {e}") from None
         fmu = sc.simulation.fmu
         if fmu is not None:
             names = fmu_variable_names(fmu)
             lacking = [n for n in COMMANDED_VARIABLES if n not in names]
             if lacking:
-                raise CommandError(2, f"{fmu}: not a commanded generator FMU (issue #12): no "
+                raise CommandError(2, f"{fmu}: not a commanded generator FMU : no "
                                       f"{', '.join(lacking)}")
             values = fmu_jerk_sources(fmu)
             if values is not None and not set(sources) <= values:
@@ -157,7 +155,7 @@ def run(args: argparse.Namespace) -> int:
                                       f"(it allows {', '.join(str(v) for v in sorted(values))})")
 
     # 2. run (nothing is written yet)
-    import matplotlib
+    import matplotlib  # deferred: matplotlib is heavy to import
 
     matplotlib.use("Agg")
     results = []  # per scenario: one result per jerk source
@@ -180,8 +178,6 @@ def run(args: argparse.Namespace) -> int:
     summary = "\n\n".join(format_online(runs) for runs in results)
 
     # 3. write everything, or nothing
-    from ..results import save_figure, write_csv
-
     def write(o: OutputSet) -> None:
         for stem, runs in zip(stems, results, strict=True):
             write_csv(o.path(f"{stem}-online.csv"), online_rows(runs))
@@ -198,9 +194,7 @@ def run(args: argparse.Namespace) -> int:
 
 def fmu_variable_names(path: Path) -> set[str]:
     """Names of every variable of an FMU file (``ValueError`` if it is not one)."""
-    from fmpy import read_model_description
-
-    from ..fmu.runner import check_fmu_archive
+    from fmpy import read_model_description  # deferred: fmpy is heavy to import
 
     check_fmu_archive(path)
     return {v.name for v in read_model_description(str(path)).modelVariables}
@@ -208,8 +202,6 @@ def fmu_variable_names(path: Path) -> set[str]:
 
 def fmu_jerk_sources(path: Path) -> set[int] | None:
     """Values an FMU file allows for ``jerk_source`` (None if it does not say)."""
-    from fmpy import read_model_description
-
-    from ..online import jerk_source_values
+    from fmpy import read_model_description  # deferred: fmpy is heavy to import
 
     return jerk_source_values(read_model_description(str(path)))

@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
-from ._common import interruptible
+from ..claims import CATALOGUE
+from ..fmu.build import BuildError, default_fmu
+from ..fmu.runner import check_fmu_binary, check_fmu_variables
+from ..report import print_failures, write_report
+from ._common import CommandError, add_out_option, check_out_dir, check_out_file, interruptible
 
 
 def _claim_list(text: str) -> list[int]:
@@ -23,8 +26,6 @@ def _claim_list(text: str) -> list[int]:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``report`` command."""
-    from ..claims import CATALOGUE
-
     available = ", ".join(f"{n} ({title})" for n, (_m, title) in sorted(CATALOGUE.items()))
     p = sub.add_parser(
         "report",
@@ -44,8 +45,7 @@ def register(sub: argparse._SubParsersAction) -> None:
             "reported as findings), 1 when a product check fails or a claim cannot be "
             "computed, also when a paper statement fails with --strict; 2 on bad arguments."),
     )
-    p.add_argument("-o", "--output", type=Path, default=Path("report.html"), metavar="HTML",
-                   help="the HTML file to write (default: ./report.html)")
+    add_out_option(p, "report", kind="file", default=Path("report.html"))
     p.add_argument("--fast", action="store_true",
                    help="small grids, as in the test suite (default: full grids)")
     p.add_argument("--claims", type=_claim_list, default=None, metavar="N[,N...]",
@@ -66,83 +66,59 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run the claims, write the report, print one line per claim."""
-    from ..claims import CATALOGUE
-    from ..report import print_failures, write_report
-    from ._common import CommandError, check_out_file
+    """Run the claims, write the report, print one line per claim.
 
-    try:
-        check_out_file(args.output, "-o")
-        if args.figures_beside:
-            from ._common import check_out_dir
-
-            check_out_dir(args.output.with_name(args.output.stem + "_files"), "-o")
-    except CommandError as e:
-        print(f"djl-fmu report: {e}", file=sys.stderr)
-        return e.status
+    A :class:`~harness.errors.CommandError` it raises is reported by
+    :func:`harness.cli.main` (message and exit status).
+    """
+    out: Path = args.out
+    check_out_file(out)
+    if args.figures_beside:
+        check_out_dir(out.with_name(out.stem + "_files"))
     numbers = set(CATALOGUE)
     if args.claims is not None:
         unknown = sorted(set(args.claims) - numbers)
         if unknown:
-            print(f"djl-fmu report: no claim {unknown}; available: {sorted(numbers)}",
-                  file=sys.stderr)
-            return 2
+            raise CommandError(2, f"no claim {unknown}; available: {sorted(numbers)}")
     if args.fmu is not None:
-        from ..planner import check_fmu_variables
-
         if not args.fmu.is_file():
-            print(f"djl-fmu report: --fmu {args.fmu}: no such file", file=sys.stderr)
-            return 2
+            raise CommandError(2, f"--fmu {args.fmu}: no such file")
         try:
             missing = check_fmu_variables(args.fmu)
-        except ValueError as e:
-            print(f"djl-fmu report: --fmu {e}", file=sys.stderr)
-            return 2
-        if missing:
-            print(f"djl-fmu report: --fmu {args.fmu}: the FMU lacks the generator variables "
-                  + ", ".join(missing), file=sys.stderr)
-            return 2
-        from ..planner import check_fmu_binary
-
-        try:
             check_fmu_binary(args.fmu)
         except ValueError as e:
-            print(f"djl-fmu report: --fmu {e}", file=sys.stderr)
-            return 2
-    if args.fmu is None:
+            raise CommandError(2, f"--fmu {e}") from None
+        if missing:
+            raise CommandError(2, f"--fmu {args.fmu}: the FMU lacks the generator variables "
+                                  + ", ".join(missing))
+    else:
         # the package's FMU is built (or found in the cache) now, not inside a claim
-        from ..fmu.build import BuildError, default_fmu
-
         try:
             default_fmu(args.fmi_version)
         except (BuildError, OSError) as e:
-            print(f"djl-fmu report: cannot build the FMU: {e}", file=sys.stderr)
-            return 1
+            raise CommandError(1, f"cannot build the FMU: {e}") from None
     command = " ".join(
-        ["djl-fmu report", "-o", str(args.output)]
+        ["djl-fmu report", "-o", str(out)]
         + (["--fast"] if args.fast else [])
         + (["--claims", ",".join(map(str, args.claims))] if args.claims else [])
         + (["--no-peers"] if args.no_peers else [])
         + (["--fmu", str(args.fmu)] if args.fmu else ["--fmi-version", str(args.fmi_version)]))
     try:
-        summary = write_report(args.output, fast=args.fast, fmi_version=args.fmi_version,
+        summary = write_report(out, fast=args.fast, fmi_version=args.fmi_version,
                                fmu=args.fmu, only=args.claims, embed=not args.figures_beside,
                                progress=True, command=command,
                                on_result=lambda r: print(r.summary(), flush=True),
                                peers=False if args.no_peers else None)
     except OSError as e:
-        print(f"djl-fmu report: cannot write {args.output}: {e} (the previous report, if any, "
-              f"is unchanged)", file=sys.stderr)
-        return 1
+        raise CommandError(1, f"cannot write {out}: {e} (the previous report, if any, is "
+                              f"unchanged)") from None
     print()
     print_failures(summary)
     n_ok = sum(r.passed for r in summary.results)
     print(f"\n{n_ok}/{len(summary.results)} claims passed; report: {summary.path} "
           f"({summary.elapsed:.1f} s)")
     if not summary.product_ok:
-        print("djl-fmu report: a product check failed or a claim could not be computed",
-              file=sys.stderr)
-        return 1
+        raise CommandError(1, "a product check failed or a claim could not be computed")
     if args.strict and not summary.all_passed:
-        return 1
+        raise CommandError(1, "a paper statement failed (--strict)")
     return 0

@@ -4,13 +4,34 @@ from __future__ import annotations
 
 import argparse
 import functools
+import hashlib
+import shutil
+import tempfile
 from pathlib import Path
-from typing import TYPE_CHECKING
 
-from ._common import TUNING_HELP, interruptible
-
-if TYPE_CHECKING:
-    from ._outputs import OutputSet
+from ..files import OutputSet, save_figure, write_csv
+from ..fmu.build import default_fmu
+from ..results import SweepResult, format_table2, table2_rows
+from ..scenario import DEFAULT_SCENARIOS, embedded_scenarios
+from ..sweeps import run_scenario
+from ._common import (
+    CommandError,
+    add_engine_option,
+    add_fmu_options,
+    add_map_error_option,
+    add_out_option,
+    add_quiet_option,
+    add_scenarios_argument,
+    add_tuning_option,
+    apply_tuning,
+    check_finite,
+    interruptible,
+    load_scenarios,
+    parse_tuning,
+    report_written,
+    run_forked,
+    write_outputs,
+)
 
 DESCRIPTION = """\
 Co-simulate the generator FMU (one instance for the excited X or Y axis, one for
@@ -67,32 +88,18 @@ def register(sub: argparse._SubParsersAction) -> None:
         epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("scenarios", nargs="*", metavar="SCENARIO",
-                   help="TOML scenario file or embedded scenario name (default: X Y sweep-X "
-                        "sweep-Y)")
-    p.add_argument("-o", "--out", type=Path, default=Path("djl-fmu-out") / "simulate",
-                   metavar="DIR", help="output folder (default: ./djl-fmu-out/simulate)")
-    p.add_argument("--fmi-version", type=int, choices=(2, 3), default=None,
-                   help="use the package's FMI 2.0 or 3.0 FMU (default: the scenario's, "
-                        "which defaults to 2)")
-    p.add_argument("--fmu", type=Path, default=None, metavar="PATH",
-                   help="a generator FMU file with the same variables (overrides the "
-                        "scenario's)")
-    p.add_argument("--engine", choices=("fmu", "fast"), default=None,
-                   help="fmu: the generator FMUs stepped through fmpy (the reference); fast: the "
-                        "same generator core and plant compiled, called once per move (default: "
-                        "fmu for single moves, fast for sweeps)")
-    p.add_argument("--tuning", default=None, metavar="LIST", help=TUNING_HELP)
-    p.add_argument("--map-error", type=float, default=None, metavar="E",
-                   help="uncertainty of the 'robust' tuning: the whole mode map f(z) off by up to "
-                        "+/-E (default: the scenario's map_error, 0.1)")
+    add_scenarios_argument(p, "X Y sweep-X sweep-Y")
+    add_out_option(p, "simulate")
+    add_fmu_options(p)
+    add_engine_option(p, None, "fmu for single moves, fast for sweeps")
+    add_tuning_option(p, "add")
+    add_map_error_option(p, "uncertainty of the 'robust' tuning")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help="with --tuning: run each sweep's cases on N processes (default: every "
                         "core); without it the scenarios already share the cores")
-    p.add_argument("--no-plot", action="store_true", help="do not write the PNG figures")
+    add_quiet_option(p)
     p.add_argument("--list", action="store_true",
                    help="list the embedded scenarios and exit")
-    p.add_argument("-q", "--quiet", action="store_true", help="do not print the tables")
     p.add_argument("--no-fmus", action="store_true",
                    help="in the default run, do not write the FMI 2.0 / 3.0 FMU files")
     p.set_defaults(func=interruptible(run))
@@ -101,21 +108,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     """Check every scenario, run them, then write the outputs; return the exit status.
 
-    A :class:`~harness.commands._common.CommandError` it raises is reported by
+    A :class:`~harness.errors.CommandError` it raises is reported by
     :func:`harness.cli.main` (message and exit status).
     """
-    from ..scenario import DEFAULT_SCENARIOS, embedded_scenarios
-    from ._common import (
-        CommandError,
-        apply_tuning,
-        check_finite,
-        load_scenarios,
-        parse_tuning,
-        report_written,
-        run_forked,
-        write_outputs,
-    )
-
     if args.list:
         for name, desc in embedded_scenarios().items():
             print(f"{name:10s} {desc}")
@@ -130,17 +125,11 @@ def run(args: argparse.Namespace) -> int:
         raise CommandError(2, f"--workers {args.workers}: must be >= 1")
 
     # 2. simulate (nothing is written yet)
-    import matplotlib
+    import matplotlib  # deferred: matplotlib is heavy to import
 
     matplotlib.use("Agg")
     # the scenarios are independent: each is run, and its figures drawn into a staging folder,
     # by a forked worker (all cores); nothing is written in --out before they all succeeded
-    import shutil
-    import tempfile
-
-    from ..cosim import run_scenario  # noqa: F401 - imported once, before the workers fork
-    from ..results import SweepResult, format_table2, table2_rows, write_csv
-
     progress = not args.quiet and (len(scenarios) == 1 or bool(variants))
     staging = Path(tempfile.mkdtemp(prefix="djl-fmu-simulate-"))
     try:
@@ -188,9 +177,6 @@ def run(args: argparse.Namespace) -> int:
 def _scenario_task(sc, stem: str, staging: Path, progress: bool, engine: str | None,
                    plot: bool, workers: int | None = 1) -> tuple[object, list[str]]:
     """Run one scenario and draw its figures into ``staging``; return it and their names."""
-    from ..cosim import run_scenario
-    from ..results import save_figure
-
     r = run_scenario(sc, progress=progress, engine=engine, workers=workers)
     names = []
     if plot:
@@ -208,18 +194,12 @@ def _write_fmus(o: OutputSet) -> None:
     hash of the sources, model description and flags: editing the C code rebuilds them);
     validation with fmpy is remembered beside each cached file, keyed by its SHA-256.
     """
-    import hashlib
-    import shutil
-
-    from ..fmu.build import default_fmu
-    from ._common import CommandError
-
     for v in (2, 3):
         cached = default_fmu(v)
         digest = hashlib.sha256(cached.read_bytes()).hexdigest()
         stamp = cached.with_name(cached.name + ".valid")
         if not (stamp.is_file() and stamp.read_text(encoding="utf-8").strip() == digest):
-            from fmpy.validation import validate_fmu
+            from fmpy.validation import validate_fmu  # deferred: fmpy is heavy to import
 
             problems = validate_fmu(str(cached))
             if problems:

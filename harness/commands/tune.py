@@ -3,15 +3,27 @@
 from __future__ import annotations
 
 import argparse
-import math
 import sys
-from pathlib import Path
-from typing import TYPE_CHECKING
 
-from ._common import interruptible
-
-if TYPE_CHECKING:
-    from ._outputs import OutputSet
+from ..executors import ExecutorError, make_executor
+from ..files import OutputSet
+from ..tuning.tables import TuneError, parse_tuning, tune_table, with_methods
+from ..workspace import check_engine
+from ._common import (
+    CommandError,
+    add_map_error_option,
+    add_out_option,
+    add_parallel_options,
+    add_quiet_option,
+    add_tuning_option,
+    check_map_error_option,
+    check_parallel_options,
+    check_rows_finite,
+    interruptible,
+    load_scenarios,
+    report_written,
+    write_outputs,
+)
 
 DESCRIPTION = """\
 Tune the jerk times of JL and DJL for a move, every case of a [sweep] or every
@@ -54,7 +66,7 @@ has succeeded:
                          motion_time_s, jl_motion_time_s, method, ... (docs/tune.md)
   summary.txt            what is printed
 FMU: profile = 3 with T_F1..T_F4 = djl_T_F1_s..djl_T_F4_s (DJL), profile = 2 with
-T_F1 = jl_T_F_s (JL). Python: harness.jerktimes.load_jerk_times(path),
+T_F1 = jl_T_F_s (JL). Python: harness.tuning.tables.load_jerk_times(path),
 fmu_parameters(row).
 """
 
@@ -95,60 +107,31 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("scenario", metavar="SCENARIO",
                    help="TOML scenario file, or an embedded scenario name (X, Y, sweep-X, "
                         "sweep-Y)")
-    p.add_argument("--tuning", default=None, metavar="LIST",
-                   help="tuning methods: a DJL method (paper, optimal, robust), 'end', or "
-                        "'djl=METHOD,jl=METHOD' (default: DJL robust, JL end)")
-    p.add_argument("--map-error", type=float, default=None, metavar="E",
-                   help="relative map error in [0, 1) of the robust method and of the "
-                        "worst-case residuals (default: the scenario's map_error, 0.1)")
+    add_tuning_option(p, "pick")
+    add_map_error_option(p, "uncertainty of the robust method and of the worst-case residuals")
     p.add_argument("--single", action="store_true",
                    help="tune the scenario's own move only, whatever its [map] or [sweep]")
-    p.add_argument("-o", "--out", type=Path, default=Path("djl-fmu-out") / "tune",
-                   metavar="DIR", help="output folder (default: ./djl-fmu-out/tune)")
-    p.add_argument("--workers", type=int, default=None, metavar="N",
-                   help="local worker processes (default: one per core; 1 runs in this "
-                        "process, as does a single move)")
-    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="run on a Dask cluster: the scheduler's address, e.g. "
-                        "tcp://10.0.0.5:8786")
-    p.add_argument("--max-moves", type=int, default=None, metavar="N",
-                   help="tune only the first N moves of the [map] grid or [sweep]")
-    p.add_argument("-q", "--quiet", action="store_true",
-                   help="no progress bar, do not print the table")
+    add_out_option(p, "tune")
+    add_parallel_options(p, max_moves="tune only the first N moves of the [map] grid or "
+                                      "[sweep]")
+    add_quiet_option(p, None)
     p.set_defaults(func=interruptible(run))
 
 
 def run(args: argparse.Namespace) -> int:
     """Check the inputs, tune, then write the outputs; return the exit status.
 
-    A :class:`~harness.commands._common.CommandError` it raises is reported by
+    A :class:`~harness.errors.CommandError` it raises is reported by
     :func:`harness.cli.main` (message and exit status).
     """
-    from ..executors import ExecutorError, make_executor
-    from ..jerktimes import TuneError, parse_tuning, tune_table, with_methods
-    from ..workspace import check_engine
-    from ._common import (
-        CommandError,
-        check_out_dir,
-        check_parallel_options,
-        check_rows_finite,
-        load_scenarios,
-        report_written,
-        write_outputs,
-    )
-
     # 1. check everything before running anything
     check_parallel_options(args.workers, args.scheduler, args.max_moves)
     try:
         djl, jl = parse_tuning(args.tuning)
     except ValueError as e:
         raise CommandError(2, f"--tuning {args.tuning}: {e}") from None
-    if args.map_error is not None and not (math.isfinite(args.map_error)
-                                           and 0.0 <= args.map_error < 1.0):
-        raise CommandError(2, f"--map-error must be in [0, 1) (a relative error, e.g. 0.1), "
-                              f"got {args.map_error:g}")
+    check_map_error_option(args.map_error)
     (sc,), (stem,) = load_scenarios([args.scenario], None, None, args.out)
-    check_out_dir(args.out)
     try:
         sc = with_methods(sc, djl, jl, args.map_error)
     except ValueError as e:

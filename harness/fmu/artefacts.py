@@ -26,7 +26,11 @@ import zlib
 from collections.abc import Sequence
 from pathlib import Path
 
-from . import spec
+import numpy as np
+
+from ..errors import BuildError
+from . import codegen, spec
+from .codegen import DEFAULT_STOP_TIME
 
 LICENSE_TEXT = """BSD 3-Clause License
 
@@ -178,18 +182,14 @@ def reference_result(step: float | None = None, stop_time: float | None = None,
     rows : list of list of float
         For each point, the outputs :data:`REF_OUTPUTS`.
     """
-    import numpy as np
-
-    from .codegen import DEFAULT_STOP_TIME
-
     step = spec.DEFAULT_TE if step is None else step
     stop_time = DEFAULT_STOP_TIME if stop_time is None else stop_time
     try:
-        from .. import _engine
+        from .. import _engine  # deferred: not importable from a source checkout (not built)
     except ImportError:
         if fmu_dir is None:
             raise
-        from fmpy import simulate_fmu
+        from fmpy import simulate_fmu  # deferred: fmpy is heavy to import
 
         res = simulate_fmu(str(fmu_dir), start_time=0.0, stop_time=stop_time,
                            output_interval=step, output=list(REF_OUTPUTS))
@@ -217,8 +217,6 @@ def ref_csv_text(time: Sequence[float], rows: Sequence[Sequence[float]]) -> str:
 
 def ref_opt_text(step: float | None = None, stop_time: float | None = None) -> str:
     """Write the cross-check's ``_ref.opt``: the settings that reproduce the reference result."""
-    from .codegen import DEFAULT_STOP_TIME
-
     step = spec.DEFAULT_TE if step is None else step
     stop_time = DEFAULT_STOP_TIME if stop_time is None else stop_time
     return (f"StartTime, 0.0\nStopTime, {stop_time!r}\nStepSize, {step!r}\n"
@@ -227,8 +225,6 @@ def ref_opt_text(step: float | None = None, stop_time: float | None = None) -> s
 
 def ls_ref_manifest(ref_name: str) -> str:
     """FMI-LS-REF manifest: one experiment (the default), its reference result, the licence."""
-    from .codegen import DEFAULT_STOP_TIME
-
     return f"""<?xml version="1.0" encoding="UTF-8"?>
 <fmiReferences xmlns:fmi-ls="http://fmi-standard.org/fmi-ls-manifest"
   fmi-ls:fmi-ls-name="org.fmi-standard.fmi-ls-ref" fmi-ls:fmi-ls-version="1.0.0-alpha.1"
@@ -273,8 +269,6 @@ def default_move_plot(path: Path, time: Sequence[float], rows: Sequence[Sequence
 
 def documentation_html(fmi_version: int, plot_name: str) -> str:
     """Text of ``documentation/index.html``: variables, the step rule, the default move."""
-    from . import codegen
-
     def cell(v: object) -> str:
         return html.escape("" if v is None else str(v))
 
@@ -373,8 +367,6 @@ def write_artefacts(root: Path, fmi_version: int) -> None:
     try:
         time, rows = reference_result(fmu_dir=root)
     except Exception as e:  # noqa: BLE001  (no compiled core and no binary for this machine)
-        from .build import BuildError
-
         raise BuildError(f"cannot compute the FMU's reference result: the harness's compiled "
                          f"core is not importable ({e}) and the FMU has no binary for this "
                          f"machine: install the package (pip install .) or build the host's "

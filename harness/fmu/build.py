@@ -28,7 +28,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .._resources import fmu_src_dir, modeldesc_dir
+from ..errors import BuildError
 from . import codegen, spec
+from .artefacts import write_artefacts
 
 CFLAGS = ("-std=c99", "-O2", "-fPIC", "-fvisibility=hidden", "-Wall", "-Wextra", "-Wpedantic",
           "-Werror")
@@ -42,10 +44,6 @@ ZIG_CFLAGS = ("-s",)
 
 ZIG = "zig"
 """The ``cc`` that names the cross compiler of PyPI's ``ziglang`` (``python -m ziglang cc``)."""
-
-
-class BuildError(RuntimeError):
-    """The compiler failed, or the sources are incomplete."""
 
 
 @dataclass(frozen=True)
@@ -98,7 +96,7 @@ def host_platform() -> str:
     BuildError
         If this machine is none of :data:`PLATFORMS`.
     """
-    import fmpy
+    import fmpy  # deferred: fmpy is heavy to import
 
     if fmpy.platform_tuple not in PLATFORMS:
         raise BuildError(f"this machine ({fmpy.platform_tuple}) is not a platform the FMU can be "
@@ -141,7 +139,7 @@ def resolve_platforms(platforms: str | Sequence[str]) -> tuple[str, ...]:
 
 def fmi_include_dir() -> Path:
     """Directory of the FMI 2 / FMI 3 headers shipped with fmpy."""
-    import fmpy
+    import fmpy  # deferred: fmpy is heavy to import
 
     d = Path(fmpy.__file__).resolve().parent / "c-code"
     if not (d / "fmi2Functions.h").is_file() or not (d / "fmi3Functions.h").is_file():
@@ -494,8 +492,6 @@ def build_fmu(fmi_version: int, out_path: str | os.PathLike, *,
             shutil.copyfile(modeldesc_dir() / "fmi3" / "buildDescription.xml",
                             root / "sources" / "buildDescription.xml")
         build_binaries(fmi_version, root, names, cc=cc, extra_cflags=extra_cflags)
-        from .artefacts import write_artefacts
-
         write_artefacts(root, fmi_version)
         tmp_zip = out_path.with_name(out_path.name + f".tmp{os.getpid()}")
         try:

@@ -19,7 +19,7 @@ import math
 import shutil
 import tempfile
 import weakref
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -114,6 +114,99 @@ def check_fmu_archive(path: str | Path) -> None:
         name = i.filename
         if name.startswith(("/", "\\")) or ".." in Path(name).parts or ":" in name:
             raise ValueError(f"{path}: unsafe file name in the FMU: {name!r}")
+
+
+REQUIRED_VARIABLES = (
+    # parameters the harness sets
+    "profile", "Te", "t_start", "x0", "distance", "v_max", "a_max", "d_max",
+    "T_F1", "T_F2", "T_F3", "T_F4", "short_stage",
+    # outputs it reads
+    "x", "v", "a", "j", "a_AL", "done",
+    # calculated parameters it reads
+    "motion_time", "N_F1", "N_F2", "N_F3", "N_F4",
+)
+"""Variables a generator FMU must have for the harness (FMI 2 or 3)."""
+
+
+def check_fmu_variables(path: str | Path) -> list[str]:
+    """Names of :data:`REQUIRED_VARIABLES` missing from an FMU file.
+
+    Parameters
+    ----------
+    path : path-like
+        An ``.fmu`` file.
+
+    Returns
+    -------
+    list of str
+        Missing variable names (empty when the FMU is usable).
+
+    Raises
+    ------
+    ValueError
+        If the file cannot be read as an FMU, or would unpack to more than
+        :data:`harness.fmu.runner.MAX_FMU_UNPACKED` bytes.
+    """
+    from fmpy import read_model_description  # deferred: fmpy is heavy to import
+
+    check_fmu_archive(path)
+    try:
+        md = read_model_description(str(path))
+    except Exception as e:  # noqa: BLE001 - any failure means "not an FMU"
+        raise ValueError(f"cannot read {path} as an FMU: {e}") from None
+    names = {v.name for v in md.modelVariables}
+    return [n for n in REQUIRED_VARIABLES if n not in names]
+
+
+def check_fmu_binary(path: str | Path) -> None:
+    """Check that an FMU file has a co-simulation binary for this platform that loads.
+
+    Only the library is unpacked (into a temporary folder, removed), then
+    loaded and unloaded.
+
+    Raises
+    ------
+    ValueError
+        Naming the file: no co-simulation interface, no binary for this
+        platform, or a binary that cannot be loaded (corrupt, wrong architecture).
+    """
+    import zipfile
+
+    import fmpy  # deferred: fmpy is heavy to import
+    from fmpy import read_model_description
+
+    path = Path(path)
+    check_fmu_archive(path)
+    try:
+        md = read_model_description(str(path))
+    except Exception as e:  # noqa: BLE001
+        raise ValueError(f"cannot read {path} as an FMU: {e}") from None
+    cs = md.coSimulation
+    if cs is None:
+        raise ValueError(f"{path}: not a co-simulation FMU")
+    plat = fmpy.platform_tuple if md.fmiVersion.startswith("3") else fmpy.platform
+    member = f"binaries/{plat}/{cs.modelIdentifier}{fmpy.sharedLibraryExtension}"
+    tmp = tempfile.mkdtemp(prefix="djl-fmu-check-")
+    try:
+        try:
+            with zipfile.ZipFile(path) as z:
+                if member not in z.namelist():
+                    raise ValueError(f"{path}: the FMU has no binary for this platform "
+                                     f"({member}); rebuild it here (e.g. fmpy compile)")
+                lib = Path(z.extract(member, tmp))
+        except (zipfile.BadZipFile, OSError, RuntimeError) as e:
+            raise ValueError(f"{path}: cannot unpack {member}: {e}") from None
+        try:
+            handle = ctypes.CDLL(str(lib))
+        except OSError as e:
+            raise ValueError(f"{path}: the FMU's binary {member} cannot be loaded: "
+                             f"{str(e).replace(str(lib) + ': ', '')}") from None
+        try:
+            fmpy.freeLibrary(ctypes.c_void_p(handle._handle))
+        except Exception:  # noqa: BLE001
+            pass
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
 
 
 def _read_fmu(path: Path) -> Any:
@@ -497,27 +590,44 @@ class GeneratorFMU:
         self._call(self.fmu.doStep, currentCommunicationPoint=self.time, communicationStepSize=h)
         self.time += h
 
-    def record(self, n: int, h: float, reals: Sequence[str],
-               flags: Sequence[str] = ()) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    def record(self, n: int, h: float, reals: Sequence[str], flags: Sequence[str] = (), *,
+               inputs: Callable[[int], Mapping[str, Any]] | None = None,
+               stop: Callable[[int, Mapping[str, np.ndarray]], int | None] | None = None
+               ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         """Read the outputs now, then after each of ``n`` steps of ``h``.
+
+        The one stepping loop of the harness: every FMU run (a move, a
+        co-simulation's axis, the online f_mode run) goes through it.
 
         Parameters
         ----------
         n : int
-            Number of communication steps.
+            Number of communication steps (with ``stop``: at most).
         h : float
             Communication step (s), any value > 0.
         reals : sequence of str
             Real outputs to record.
         flags : sequence of str
-            Boolean or Integer outputs to record (``done``, ``segment``).
+            Boolean or Integer outputs to record (``done``, ``segment``, ``stage``).
+        inputs : callable, optional
+            ``inputs(k)`` -> {input name: value}, set (:meth:`set_inputs`) before
+            the step from point k.
+        stop : callable, optional
+            ``stop(k, values)`` after the step to point k, ``values`` the
+            outputs recorded up to it: the total number of steps once known
+            (None until then); the run ends there, or after ``n`` steps.
 
         Returns
         -------
         t : ndarray
-            The n + 1 communication points.
+            The communication points reached (n + 1 without ``stop``).
         values : dict of ndarray
-            One array of n + 1 values per name.
+            One array per name, a value per point.
+
+        Raises
+        ------
+        FMUError
+            An FMI call failed, or the FMU refused an input (named).
         """
         vrs = self.vr(reals)
         getters = []
@@ -530,22 +640,38 @@ class GeneratorFMU:
         other = {name: np.empty(n + 1, dtype=np.int64) for name in flags}
         t = self.time + h * np.arange(n + 1)
         step, get_reals = self.fmu.doStep, self.get_reals
-        from fmpy.fmi1 import FMICallException
+        from fmpy.fmi1 import FMICallException  # deferred: fmpy is heavy to import
 
+        def view(m: int) -> dict[str, np.ndarray]:
+            out = {name: rows[:m, i] for i, name in enumerate(reals)}
+            out.update({name: v[:m] for name, v in other.items()})
+            return out
+
+        end = None if stop is not None else n
+        k = 0
         try:
-            for k in range(n + 1):
+            while True:
                 if k:
                     step(currentCommunicationPoint=t[k - 1], communicationStepSize=h)
                 rows[k] = get_reals(vrs)
                 for name, get, vr in getters:
                     other[name][k] = get(vr)[0]
+                if k and end is None:
+                    end = stop(k, view(k + 1))  # type: ignore[misc]
+                    if end is not None and not k <= end <= n:
+                        raise ValueError(f"stop returned {end} steps at step {k} (at most {n})")
+                if k >= (n if end is None else end):
+                    break
+                if inputs is not None:
+                    self.set_inputs(**inputs(k))
+                k += 1
         except FMICallException as e:
             raise FMUError(str(getattr(e, "function", "doStep")), int(e.status),
                            self.log) from None
-        self.time = float(t[-1])
-        values = {name: rows[:, i] for i, name in enumerate(reals)}
-        values.update(other)
-        return t, values
+        self.time = float(t[k])
+        values = view(k + 1)
+        values = {name: v.copy() for name, v in values.items()}
+        return t[: k + 1].copy(), values
 
     def get_state(self) -> Any:
         """Opaque FMU state (free it with :meth:`free_state`)."""

@@ -52,38 +52,57 @@ move (the mode stays at its end-of-motion frequency).
 
 from __future__ import annotations
 
+import base64
 import dataclasses
+import html as _html
+import io
 import math
-import time
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from ..robustness import DEFAULT_ERRORS
-from .damped_jerk import DampedJerkFilter, DampedJerkMotion
+from ..evaluation import profile_metrics, run_case
+from ..files import write_csv
+from ..fmu import spec as fmu_spec
+from ..fmu.runner import generate
+from ..robustness import RobustnessResult
+from ..scenario import Scenario, load_scenario
+from ..simulation.master import CoSimResult, cosimulate, map_error_residuals
+from ..simulation.session import Session
+from ..uncertainty import DEFAULT_ERRORS, WORST_SPAN, check_map_errors
+from .context import PeerContext, PeerSpec, placed
+from .motion_axis import MotionAxis
+from .registry import ALL_PEERS, OPTIONAL_PEERS, PEERS, build
 from .residual import RobustnessCurve, robustness_curve
 from .ruckig_ref import time_optimal
-from .sato import amplitude_table1, jerk_J1, sato_profile
-from .shapers import make_shaper, shape
-from .trajectory import Motion, PiecewiseJerk, SampledTrajectory
+from .sato import sato_design
+from .trajectory import Motion, PiecewiseJerk, SampledTrajectory, from_fmu
 
-PEERS = ("time-optimal JL", "Sato III", "AL*ZV", "AL*ZVD", "AL*MZV", "AL*EI", "JL*ZV",
-         "JL*ZVD", "JL*EI", "AL*TV-ZV", "JL*TV-ZV", "damped jerk")
-"""The peer methods run by default, in table order (after AL, JL, DJL)."""
-
-OPTIONAL_PEERS = ("JL*MZV",)
-"""Peers run only when asked for (``peers=`` / ``--peers``)."""
-
-ALL_PEERS = PEERS + OPTIONAL_PEERS
-"""Every peer :func:`build_peers` knows."""
+__all__ = [
+    "ALL_PEERS",
+    "BASE",
+    "OPTIONAL_PEERS",
+    "PEERS",
+    "MethodOutcome",
+    "PeerComparison",
+    "PeerSpec",
+    "base_motion",
+    "build_peers",
+    "compare_scenario",
+    "cosimulate_reference",
+    "placed",
+    "reference_map_error_residuals",
+    "sato_design",
+    "stationary_variant",
+]
 
 BASE = ("AL", "JL", "DJL")
 
 MAP_ERRORS = DEFAULT_ERRORS
 """Map errors e of the time-varying robustness curves: -20 % .. +20 %, 1 % apart
-(:data:`harness.robustness.DEFAULT_ERRORS`); the worst case is over ±10 %."""
+(:data:`harness.uncertainty.DEFAULT_ERRORS`); the worst case is over ±10 %."""
 
 DJL_TUNINGS = ("optimal", "robust")
 """DJL tuning methods added as rows ``DJL (<tuning>)`` when the harness has
@@ -91,70 +110,6 @@ DJL_TUNINGS = ("optimal", "robust")
 
 
 # ------------------------------------------------------------------ building
-
-
-def _placed(m: PiecewiseJerk, t_start: float, x0: float, sign: float = 1.0) -> PiecewiseJerk:
-    """Start the motion at ``t_start`` from ``x0``; mirror it when ``sign < 0``."""
-    return PiecewiseJerk(m.tb + t_start, x0 + sign * (m.x - m.x[0]), sign * m.v, sign * m.a,
-                         sign * m.j, name=m.name, params=dict(m.params))
-
-
-def sato_design(distance: float, v_max: float, a_max: float, f: float, Te: float,
-                T_SUM_min: float) -> tuple[float, float]:
-    """Pick ``(T_SUM, T_1)`` of a Condition III profile for a move (see the module notes).
-
-    Condition III: peak velocity ``1.5 L / (T_SUM - T_1)``, peak acceleration
-    ``6 L / (T_SUM (T_SUM - T_1))`` (from eq. 18-19).
-
-    Parameters
-    ----------
-    distance : float
-        Move length (m, its magnitude is used).
-    v_max, a_max : float
-        Limits to keep (a_max: the smaller of acceleration and deceleration).
-    f : float
-        Mode frequency the jerk times are designed for (Hz).
-    Te : float
-        Grid of T_SUM and T_1 (s).
-    T_SUM_min : float
-        Shortest positioning time wanted (s).
-
-    Returns
-    -------
-    T_SUM, T1 : float
-    """
-    L = abs(distance)
-    n = int(math.ceil(T_SUM_min / Te - 1e-9))
-    for _ in range(1_000_000):
-        T_SUM = n * Te
-        t1_max = min(T_SUM - 1.5 * L / v_max, T_SUM - 6.0 * L / (a_max * T_SUM),
-                     T_SUM / 2 - Te)
-        k_max = int(math.floor(t1_max / Te + 1e-9))
-        if k_max >= 1:
-            T1 = Te * np.arange(1, k_max + 1)
-            amp = np.abs(amplitude_table1("III", jerk_J1(L, T_SUM, T1, "III"), T1, T_SUM,
-                                          2 * math.pi * f))
-            return T_SUM, float(T1[int(np.argmin(amp))])
-        n += 1
-    raise RuntimeError("no feasible Sato profile")  # pragma: no cover
-
-
-@dataclass
-class PeerSpec:
-    """How one peer was built (for the table header and the CSV).
-
-    Attributes
-    ----------
-    name : str
-    tuned_to : str
-        Human-readable tuning.
-    params : dict
-        The numbers.
-    """
-
-    name: str
-    tuned_to: str
-    params: dict[str, Any] = field(default_factory=dict)
 
 
 def base_motion(sc: Any, profile: str, T_F: float | None = None, distance: float | None = None,
@@ -182,8 +137,10 @@ def base_motion(sc: Any, profile: str, T_F: float | None = None, distance: float
         (one breakpoint per stage boundary).
     """
     m, s = sc.move, sc.simulation
+    if profile not in ("AL", "JL"):
+        raise ValueError(f"base profile must be AL or JL, got {profile!r}")
     params: dict[str, Any] = {
-        "profile": {"AL": 1, "JL": 2}[profile], "Te": s.Te, "t_start": m.t_start, "x0": m.x0,
+        "profile": fmu_spec.PROFILE_CODES[profile], "Te": s.Te, "t_start": m.t_start, "x0": m.x0,
         "distance": m.distance if distance is None else float(distance), "v_max": m.v_max,
         "a_max": m.a_max, "d_max": m.d_max, "short_stage": s.short_stage}
     if profile == "JL":
@@ -195,9 +152,6 @@ def base_motion(sc: Any, profile: str, T_F: float | None = None, distance: float
         mot = PiecewiseJerk.from_samples(ms.t, ms.x, ms.v, ms.a, ms.j, name=profile,
                                          params=params)
     else:
-        from ..fmu.runner import generate
-        from .trajectory import from_fmu
-
         tr = generate(params, fmu=s.fmu if fmu is None else fmu, fmi_version=fmi_version)
         mot = from_fmu(tr, name=profile).to_motion()  # type: ignore[assignment]
     return mot.simplified()
@@ -217,245 +171,94 @@ def build_peers(sc: Any, T_F_JL: float, motion_time_JL: float, *,
     motion_time_JL : float
         JL motion time (s) (Sato's positioning time).
     peers : iterable of str
-        Subset of :data:`ALL_PEERS`.
+        Subset of :data:`ALL_PEERS` (:mod:`harness.peers.registry`).
     fmu, fmi_version
-        Generator FMU for the AL and JL profiles when no session is given.
-    session : harness.cosim.Session, optional
+        Generator FMU of the session opened when none is given.
+    session : harness.simulation.session.Session, optional
         Plans the AL / JL profiles and, for the time-varying shapers, the
-        synchronised Z move; without it an FMU session is opened for the
-        time-varying shapers.
+        synchronised Z move; without it one is opened (and closed).
 
     Returns
     -------
     dict
         ``name -> (motion, spec)``.
     """
-    from .tv_shaper import design_for_scenario
-
-    m, s = sc.move, sc.simulation
     peers = tuple(peers)
     unknown = [p for p in peers if p not in ALL_PEERS]
     if unknown:
         raise ValueError(f"unknown peer method(s) {unknown}; choose from {ALL_PEERS}")
-    tm = sc.modemap.tuned
-    z_end = sc.z.z0 + sc.z.distance
-    f_end, zeta = float(tm.f(z_end)), float(tm.zeta)
-    sign = 1.0 if m.distance > 0 else -1.0
-    out: dict[str, tuple[Motion, PeerSpec]] = {}
     own = None
-    if session is None and any("TV-" in p for p in peers):
-        from ..cosim import Session
-
-        own = session = Session(s.fmu if fmu is None else fmu, fmi_version)
-    kw = {"session": session, "fmu": fmu, "fmi_version": fmi_version}
+    if session is None:
+        own = session = Session(sc.simulation.fmu if fmu is None else fmu, fmi_version)
     bases: dict[str, PiecewiseJerk] = {}
 
-    def base(profile: str) -> PiecewiseJerk:
+    def base(profile: str, distance: float | None = None) -> PiecewiseJerk:
+        if distance is not None:
+            return base_motion(sc, profile, T_F_JL, distance, session=session)
         if profile not in bases:
-            bases[profile] = base_motion(sc, profile, T_F_JL, **kw)
+            bases[profile] = base_motion(sc, profile, T_F_JL, session=session)
         return bases[profile]
 
-    mode_txt = f"{f_end:.4g} Hz, zeta = {zeta:g} (mode at the end of the motion)"
+    tm = sc.modemap.tuned
+    ctx = PeerContext(sc, T_F_JL, motion_time_JL, session,
+                      float(tm.f(sc.z.z0 + sc.z.distance)), float(tm.zeta), base)
     try:
-        for p in peers:
-            if p == "time-optimal JL":
-                j_max = m.a_max / T_F_JL
-                r = time_optimal(m.distance, m.v_max, m.a_max, j_max, d_max=m.d_max)
-                mot = _placed(r.motion(name=p), m.t_start, m.x0)
-                out[p] = (mot, PeerSpec(p, f"limits v_max, a_max, d_max, j_max = a_max/T_F(JL) "
-                                           f"= {j_max:.4g} m/s3 (not tuned)",
-                                        {"j_max": j_max, "T_opt": r.duration}))
-            elif p == "Sato III":
-                T_SUM, T1 = sato_design(m.distance, m.v_max, min(m.a_max, m.d_max), f_end, s.Te,
-                                        motion_time_JL)
-                prof = sato_profile(abs(m.distance), T_SUM, T1, "III")
-                mot = _placed(prof.motion(name=p), m.t_start, m.x0, sign)
-                out[p] = (mot, PeerSpec(p, f"T_SUM = {T_SUM * 1e3:.0f} ms, T1 = {T1 * 1e3:.0f} ms "
-                                           f"(eq. 28 minimised at {f_end:.4g} Hz)",
-                                        {"T_SUM": T_SUM, "T1": T1, "f": f_end}))
-            elif p.endswith("*TV-ZV"):
-                prof = p[:2]
-                des = design_for_scenario(
-                    sc, session,
-                    lambda d, prof=prof: base_motion(sc, prof, T_F_JL, d, **kw), name=p)
-                sh = des.shaper
-                d0 = float(sh.delay(des.base.t_start)[()])
-                d1 = float(sh.delay(des.base.t_end)[()])
-                jl_txt = f"JL T_F {T_F_JL * 1e3:.0f} ms; " if prof == "JL" else ""
-                out[p] = (des.motion, PeerSpec(
-                    p, f"{jl_txt}tuned mode f(z(t)) along the synchronised Z move, zeta = "
-                       f"{zeta:g}; delay {d0 * 1e3:.1f} -> {d1 * 1e3:.1f} ms; {prof} planned for "
-                       f"{des.distance_correction * 1e3:+.3g} mm so that the shaped move ends "
-                       "on the target",
-                    {"zeta": zeta, "rule": sh.rule, "delay_start": d0, "delay_end": d1,
-                     "distance_correction": des.distance_correction,
-                     "iterations": des.iterations, "sync_mismatch": des.sync_mismatch}))
-            elif p[:3] in ("AL*", "JL*"):
-                sh = make_shaper(p[3:], f_end, zeta)
-                mot = shape(base(p[:2]), sh, name=p)
-                jl_txt = f"JL T_F {T_F_JL * 1e3:.0f} ms; " if p[:2] == "JL" else ""
-                out[p] = (mot, PeerSpec(p, f"{jl_txt}{mode_txt}; adds {sh.duration * 1e3:.0f} ms",
-                                        {"f": f_end, "zeta": zeta, "A": sh.A.tolist(),
-                                         "t": sh.t.tolist()}))
-            else:  # damped jerk
-                flt = DampedJerkFilter(f_end, zeta)
-                mot = DampedJerkMotion.from_al(base("AL"), flt, name=p)
-                out[p] = (mot, PeerSpec(p, f"{mode_txt}; jerk time {flt.T * 1e3:.0f} ms",
-                                        {"f": f_end, "zeta": zeta, "T": flt.T}))
+        return {p: build(ctx, p) for p in peers}
     finally:
         if own is not None:
             own.close()
-    return out
 
 
 # ------------------------------------------------------------ co-simulation
 
 
-@dataclass
-class _Prepared:
-    """What :func:`cosimulate_reference` computes before stepping the plant.
-
-    None of it depends on the mode map: the map-error runs share it.
-    """
-
-    n: int
-    h: float
-    ref: SampledTrajectory
-    a: list[float]
-    a1: list[float]
-    sub: dict[int, list[tuple[float, float, float]]]
-    Za: np.ndarray
-    zm: list[float]
-    v_z: float
-    synced: bool
-    T_z: float
-    k_end: int
-
-
-def _prepare(sc: Any, session: Any, motion: Motion, t_stop: float | None) -> _Prepared:
-    """Sample the reference, split the steps at its breakpoints, run the Z axis."""
-    sim = sc.simulation
-    h = sim.step
-    v_z, synced = session.z_velocity(sc, motion.motion_time)
-    zp = session.z_move_params(sc, v_z)
-    T_z = session.z_axis.plan(zp)
-    if t_stop is None:
-        t_stop = sc.move.t_start + max(motion.motion_time, T_z) + sim.t_after
-    n = int(math.ceil(t_stop / h - 1e-9))
-    ref = motion.sample(h, t_stop=n * h)
-    t = ref.t
-    # sub-intervals: communication points plus the motion's breakpoints in between
-    bp = motion.breakpoints()
-    bp = bp[(bp > t[0]) & (bp < t[-1])]
-    k_bp = np.searchsorted(t, bp, side="right") - 1  # step index of each breakpoint
-    off = bp > t[k_bp]
-    bp, k_bp = bp[off], k_bp[off]
-    sub: dict[int, list[tuple[float, float, float]]] = {}
-    if bp.size:
-        ks = np.unique(k_bp)
-        # every edge of every split step, in order: t[k], its breakpoints, t[k + 1]
-        pts = np.unique(np.concatenate((t[ks], t[ks + 1], bp)))
-        e0, e1 = pts[:-1], pts[1:]
-        k0 = np.searchsorted(t, e0, side="right") - 1
-        inside = np.isin(k0, ks) & (e1 <= t[np.minimum(k0 + 1, t.size - 1)]) & (e1 > e0)
-        e0, e1, k0 = e0[inside], e1[inside], k0[inside]
-        ar = motion.evaluate(e0, side="right")[2]
-        al = motion.evaluate(e1, side="left")[2]
-        for k, x0, x1, u0, u1 in zip(k0.tolist(), e0.tolist(), e1.tolist(), ar.tolist(),
-                                     al.tolist(), strict=True):
-            sub.setdefault(k, []).append((x1 - x0, u0, u1))
-    a_end = ref.a + ref.j * h  # acceleration at the end of each step (jerk constant per step)
-    Za = _z_samples(session, n, h)
-    z, vz = Za[:, 0], Za[:, 1]
-    zm = (0.5 * (z[:-1] + z[1:]) + 0.125 * h * (vz[:-1] - vz[1:])).tolist()
-    k_end = min(n, int(math.ceil(motion.t_end / h - 1e-9)))
-    return _Prepared(n, h, ref, ref.a.tolist(), a_end.tolist(), sub, Za, zm, v_z, synced, T_z,
-                     k_end)
-
-
-def _step(prep: _Prepared, plant: Any, n: int) -> tuple[list[float], list[tuple[float, ...]]]:
-    """Step the plant over the first ``n`` communication steps; deflection and states."""
-    pstep = plant.step
-    a, a1, zm, sub, h = prep.a, prep.a1, prep.zm, prep.sub, prep.h
-    E = [0.0]
-    S = [tuple(plant.state)]
-    for k in range(n):
-        pieces = sub.get(k)
-        if pieces is None:
-            e = pstep(h, a[k], a1[k], zm[k])
-        else:
-            for hh, u0, u1 in pieces:
-                e = pstep(hh, u0, u1, zm[k])
-        E.append(e)
-        S.append(tuple(plant.state))
-    return E, S
+def _reference_axis(sc: Any, motion: Motion) -> MotionAxis:
+    return MotionAxis(motion, Te=sc.simulation.Te, x0=sc.move.x0, distance=sc.move.distance)
 
 
 def cosimulate_reference(sc: Any, session: Any, motion: Motion, label: str,
-                         t_stop: float | None = None) -> Any:
-    """Step the Z generator FMU and the scenario's plant with a precomputed reference.
+                         t_stop: float | None = None) -> CoSimResult:
+    """Step the Z generator and the scenario's plant with a precomputed reference.
 
-    The excited axis' FMU of :func:`harness.cosim.cosimulate` is replaced by
-    the exact ``motion``; everything else is the same: the Z move
-    (synchronised with the motion time when the scenario asks for it), the
-    scheduled plant, the mode frozen over each communication step at the Z
-    position of mid-step.  Within a step the plant's input is exact: the step
-    is split at the motion's breakpoints (acceleration steps or jerk changes
-    between samples, e.g. the delayed copies of an input shaper) and each
-    piece is advanced with its own linear acceleration -- the plant's exact
-    update.  For the FMU's profiles, whose jerk only changes at samples, this
-    is what :func:`harness.cosim.cosimulate` does.
+    The master of every run (:func:`harness.simulation.master.cosimulate`)
+    with the exact ``motion`` in place of the excited axis' generator
+    (:class:`~harness.peers.motion_axis.MotionAxis`); everything else is the
+    same: the Z move (synchronised with the motion time when the scenario asks
+    for it), the scheduled plant, the mode frozen over each communication step
+    at the Z position of mid-step.  Within a step the plant's input is exact:
+    the step is split at the motion's breakpoints (acceleration steps or jerk
+    changes between samples, e.g. the delayed copies of an input shaper) and
+    each piece is advanced with its own linear acceleration.
 
     Returns
     -------
-    harness.cosim.CoSimResult
+    harness.simulation.master.CoSimResult
     """
-    from ..cosim import CoSimResult
-    from ..plant import ScheduledPlant
-
-    sim = sc.simulation
-    prep = _prepare(sc, session, motion, t_stop)
-    n, h, ref, Za = prep.n, prep.h, prep.ref, prep.Za
-    plant = ScheduledPlant(sc.modemap.scheduled())
-    t0 = time.perf_counter()
-    E, S = _step(prep, plant, n)
-    wall = time.perf_counter() - t0
-    Sa = np.asarray(S, dtype=float)
-    nm = len(plant.modes)
-    k_end = prep.k_end
-    f = np.vstack([md.f_array(Za[:, 0]) for md in plant.modes])
-    return CoSimResult(
-        profile=label, t=ref.t, x=ref.x, v=ref.v, a=ref.a, j=ref.j, z=Za[:, 0], v_z=Za[:, 1],
-        eps=np.asarray(E), eps_modes=Sa[:, 0::2].T.copy(), f=f, t_start=motion.t_start,
-        t_end=motion.t_end, z_t_end=float(session.z_axis.get("t_start")) + prep.T_z,
-        x0=sc.move.x0, target=sc.move.x0 + sc.move.distance,
-        state_end=[(float(Sa[k_end, 2 * i]), float(Sa[k_end, 2 * i + 1])) for i in range(nm)],
-        modes_end=[md.at(float(Za[k_end, 0])) for md in plant.modes], N_F=(0, 0, 0, 0),
-        Te=sim.Te, step=h, z_v_max=prep.v_z, z_synced=prep.synced,
-        fmi_version=session.z_axis.fmi_version, engine=getattr(session, "engine", "fmu"),
-        wall_time=wall, final_state=list(plant.state),
-        final_modes=[md.at(float(Za[-1, 0])) for md in plant.modes],
-    )
+    v_z, synced = session.z_velocity(sc, motion.motion_time)
+    T_z = session.z_axis.plan(session.z_move_params(sc, v_z))
+    if t_stop is None:
+        t_stop = sc.move.t_start + max(motion.motion_time, T_z) + sc.simulation.t_after
+    run = cosimulate(_reference_axis(sc, motion), session.z_axis, sc.modemap.scheduled(),
+                     t_stop, sc.simulation.step, profile=label)
+    run.z_synced = synced
+    return run
 
 
 def reference_map_error_residuals(sc: Any, session: Any, motion: Motion,
                                   errors: Sequence[float] | np.ndarray) -> np.ndarray:
     """Residual of a precomputed reference when the whole mode map is off by 1 + e.
 
-    For each e, the residual (free-oscillation amplitude when the reference
-    ends) of ``cosimulate_reference(dataclasses.replace(sc,
-    modemap=sc.modemap.scaled(1 + e)), session, motion, ...)``: the reference
-    is the one planned on the nominal map, the Z move the same (it does not
-    depend on the map), only the plant's frequencies are scaled.  The
-    sampling, the splitting of the steps and the Z samples are computed once
-    and the plant is stepped only until the end of the reference, with the
-    same operations as :func:`cosimulate_reference` (equal results; tested).
+    The reference is the one planned on the nominal map, the Z move the same
+    (it does not depend on the map); only the plant's frequencies are scaled,
+    and it is stepped to the end of the reference once per error
+    (:func:`harness.simulation.master.map_error_residuals`, as for AL / JL /
+    DJL).
 
     Parameters
     ----------
     sc : harness.scenario.Scenario
         The nominal scenario.
-    session : harness.cosim.Session
+    session : harness.simulation.session.Session
         Its Z axis.
     motion : Motion
         The reference (planned on the nominal map).
@@ -467,50 +270,11 @@ def reference_map_error_residuals(sc: Any, session: Any, motion: Motion,
     ndarray
         Residual (m) for each error.
     """
-    from ..plant import ScheduledPlant, free_amplitude
-
-    e = np.asarray(errors, dtype=float).ravel()
-    if not np.all(np.isfinite(e)) or np.any(e <= -1.0):
-        raise ValueError(f"map errors must be finite and > -1, got {e!r}")
-    prep = _prepare(sc, session, motion, motion.t_end + sc.simulation.step)
-    z_end = float(prep.Za[prep.k_end, 0])
-    out = np.empty(e.size)
-    for i, err in enumerate(e.tolist()):
-        plant = ScheduledPlant(sc.modemap.scaled(1.0 + err).scheduled())
-        _step(prep, plant, prep.k_end)
-        st = plant.state
-        out[i] = float(sum(free_amplitude(st[2 * m], st[2 * m + 1], md.at(z_end))
-                           for m, md in enumerate(plant.modes)))
-    return out
-
-
-def _z_samples(session: Any, n: int, h: float) -> np.ndarray:
-    """Z position and velocity at the n + 1 communication points (session planned).
-
-    Engine ``"fmu"``: the Z generator FMU stepped through fmpy; ``"fast"``: the
-    same samples from the compiled engine in one call.
-    """
-    from ..fmu.runner import FMUError
-
-    if getattr(session, "engine", "fmu") == "fast":
-        ax = session.z_axis
-        m = int(round(h / ax.planned.Te))
-        return ax.samples(0, m, n + 1)[:2].T.copy()
-    gz = session.z_axis.g
-    getz = gz.fmu.getFloat64 if gz.fmi_version == 3 else gz.fmu.getReal
-    stepz = gz.fmu.doStep
-    vrz = gz.vr(["x", "v"])
-    Z = [list(getz(vrz))]
-    from fmpy.fmi1 import FMICallException
-
-    try:
-        for k in range(n):
-            stepz(k * h, h)
-            Z.append(getz(vrz))
-    except FMICallException as e:
-        raise FMUError(str(getattr(e, "function", "doStep")), int(e.status), gz.log) from None
-    gz.time = n * h
-    return np.asarray(Z, dtype=float)
+    e = check_map_errors(errors)
+    v_z, _ = session.z_velocity(sc, motion.motion_time)
+    session.z_axis.plan(session.z_move_params(sc, v_z))
+    return map_error_residuals(_reference_axis(sc, motion), session.z_axis,
+                               sc.modemap.scheduled(), 1.0 + e, sc.simulation.step)
 
 
 def _run_samples(run: Any, name: str) -> SampledTrajectory:
@@ -744,8 +508,6 @@ class PeerComparison:
 
         The curves: :meth:`robustness_rows`, :meth:`map_error_rows`.
         """
-        from ..results import write_csv
-
         return write_csv(path, self.rows())
 
     def robustness_rows(self) -> list[dict[str, Any]]:
@@ -798,7 +560,7 @@ class PeerComparison:
 
     def plot(self, title: str | None = None):
         """Residual against the mode-frequency error on a *stationary* mode; return the Figure."""
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(13, 4.8))
         self._plot_stationary(ax1, True)
@@ -822,7 +584,7 @@ class PeerComparison:
         ValueError
             If the map-error curves were not computed.
         """
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         if self.map_error is None:
             raise ValueError("no map-error curves (compare_scenario(..., map_errors=None))")
@@ -846,7 +608,7 @@ class PeerComparison:
         Left: stationary mode at ``f_end (1 + error)``; right (when computed):
         time-varying plant, whole map scaled by 1 + e.
         """
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         two = self.map_error is not None
         fig, axes = plt.subplots(1, 2 if two else 1, figsize=(14, 5.2), squeeze=False)
@@ -870,11 +632,7 @@ class PeerComparison:
 
     def html(self) -> str:
         """Return an HTML fragment (table and robustness figures, PNG embedded) for a report."""
-        import base64
-        import html as _html
-        import io
-
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         fig = self.plot_robustness()
         buf = io.BytesIO()
@@ -888,7 +646,7 @@ class PeerComparison:
 
     def plot_runs(self, title: str | None = None):
         """Deflection of every method in the scenario's co-simulation; return the Figure."""
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         fig, axes = plt.subplots(2, 1, figsize=(11, 7), sharex=True)
         for n, mo in self.methods.items():
@@ -964,10 +722,6 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
     -------
     PeerComparison
     """
-    from ..cosim import Session, profile_metrics, run_case
-    from ..robustness import WORST_SPAN, RobustnessResult, map_error_residuals
-    from ..scenario import Scenario, load_scenario
-
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     if sc.is_sweep:
         raise ValueError(f"{sc.name}: compare takes single-move scenarios, not sweeps")
@@ -982,7 +736,7 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
     msession = session
     notes: list[str] = []
     try:
-        if getattr(session, "engine", "fmu") != map_engine and (
+        if session.engine != map_engine and (
                 map_errors is not None or tuned_djl):
             msession = Session(sc.simulation.fmu, sc.simulation.fmi_version, engine=map_engine)
             own_map = True
@@ -1031,10 +785,10 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
             T_F: dict[str, tuple[float, ...] | None] = {}
             for n in BASE:
                 T_F[n] = None if n == "AL" else tuple(base.profiles[n].T_F)
-                res[n] = map_error_residuals(sc, msession, n, T_F[n], e)
+                res[n] = msession.map_error_residuals(sc, n, T_F[n], e)
             for n, (sct, tf) in tuned_sc.items():
                 T_F[n] = tf
-                res[n] = map_error_residuals(sct, msession, "DJL", tf, e)
+                res[n] = msession.map_error_residuals(sct, "DJL", tf, e)
             for n, (mot, _) in built.items():
                 T_F[n] = None
                 res[n] = reference_map_error_residuals(sc, msession, mot, e)

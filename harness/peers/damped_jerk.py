@@ -39,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from .context import PeerContext, PeerSpec
 from .trajectory import Motion, PiecewiseJerk, SampledTrajectory
 
 
@@ -325,3 +326,14 @@ def damping_sweep(zeta: np.ndarray | None = None, f: float = 1.0) -> DampingSwee
             out[name].append(100 * abs(M * np.exp(p * T)))
         out["damped jerk"].append(100 * DampedJerkFilter(f, float(z)).residual_ratio(f))
     return DampingSweep(zeta, {k: np.array(v) for k, v in out.items()})
+
+
+def build_damped_jerk(ctx: PeerContext, name: str) -> tuple[DampedJerkMotion, PeerSpec]:
+    """Peer "damped jerk": the generator's AL profile through the damped-jerk filter.
+
+    The filter is designed for the tuned mode at the end of the motion.
+    """
+    flt = DampedJerkFilter(ctx.f_end, ctx.zeta)
+    mot = DampedJerkMotion.from_al(ctx.base("AL"), flt, name=name)
+    return mot, PeerSpec(name, f"{ctx.mode_text}; jerk time {flt.T * 1e3:.0f} ms",
+                         {"f": ctx.f_end, "zeta": ctx.zeta, "T": flt.T})

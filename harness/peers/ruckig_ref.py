@@ -15,16 +15,18 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import HarnessError
+from .context import PeerContext, PeerSpec, placed
 from .trajectory import PiecewiseJerk, SampledTrajectory
 
 
-class RuckigMissingError(ImportError):
+class RuckigMissingError(HarnessError, ImportError):
     """ruckig is not installed."""
 
 
 def _ruckig() -> Any:
     try:
-        import ruckig
+        import ruckig  # deferred: an optional dependency (the [compare] extra)
     except ImportError as e:  # pragma: no cover - depends on the environment
         raise RuckigMissingError(
             "the comparison with the time-optimal trajectory needs the 'ruckig' package: "
@@ -154,3 +156,17 @@ def planner(v_max: float, a_max: float, j_max: float) -> Any:
     inp.max_acceleration = [float(a_max)]
     inp.max_jerk = [float(j_max)]
     return otg, inp, rk.Trajectory(1)
+
+
+def build_time_optimal(ctx: PeerContext, name: str) -> tuple[PiecewiseJerk, PeerSpec]:
+    """Peer "time-optimal JL": ruckig under v_max, a_max, d_max and the JL's jerk a_max/T_F(JL).
+
+    Not tuned to the mode; the reference of the motion-time ratios.
+    """
+    m = ctx.sc.move
+    j_max = m.a_max / ctx.T_F_JL
+    r = time_optimal(m.distance, m.v_max, m.a_max, j_max, d_max=m.d_max)
+    mot = placed(r.motion(name=name), m.t_start, m.x0)
+    return mot, PeerSpec(name, f"limits v_max, a_max, d_max, j_max = a_max/T_F(JL) "
+                               f"= {j_max:.4g} m/s3 (not tuned)",
+                         {"j_max": j_max, "T_opt": r.duration})

@@ -39,12 +39,14 @@ these reach eq. 28 or Table 1, which are correct.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from .residual import residual_amplitude
+from .context import PeerContext, PeerSpec, placed
+from .residual import free_deflection, residual_amplitude
 from .trajectory import PiecewiseJerk
 
 CONDITIONS = ("I", "II", "III")
@@ -313,7 +315,6 @@ class Fig10Result:
         """Acceleration profiles and the residual deflection of both (Fig. 9-10)."""
         import matplotlib.pyplot as plt
 
-        from .residual import free_deflection
 
         fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 6))
         t_after = np.linspace(0, 0.2, 800)
@@ -351,3 +352,58 @@ def fig10_example(L: float = 1e-3, f: float = 30.0, T_SUM: float = 0.040,
     defl = (float(residual_amplitude(conv.motion(), f, zeta)),
             float(residual_amplitude(des.motion(), f, zeta)))
     return Fig10Result(conv, des, f, zeta, amp, defl)
+
+
+def sato_design(distance: float, v_max: float, a_max: float, f: float, Te: float,
+                T_SUM_min: float) -> tuple[float, float]:
+    """Pick ``(T_SUM, T_1)`` of a Condition III profile for a move (see the module notes).
+
+    Condition III: peak velocity ``1.5 L / (T_SUM - T_1)``, peak acceleration
+    ``6 L / (T_SUM (T_SUM - T_1))`` (from eq. 18-19).
+
+    Parameters
+    ----------
+    distance : float
+        Move length (m, its magnitude is used).
+    v_max, a_max : float
+        Limits to keep (a_max: the smaller of acceleration and deceleration).
+    f : float
+        Mode frequency the jerk times are designed for (Hz).
+    Te : float
+        Grid of T_SUM and T_1 (s).
+    T_SUM_min : float
+        Shortest positioning time wanted (s).
+
+    Returns
+    -------
+    T_SUM, T1 : float
+    """
+    L = abs(distance)
+    n = int(math.ceil(T_SUM_min / Te - 1e-9))
+    for _ in range(1_000_000):
+        T_SUM = n * Te
+        t1_max = min(T_SUM - 1.5 * L / v_max, T_SUM - 6.0 * L / (a_max * T_SUM),
+                     T_SUM / 2 - Te)
+        k_max = int(math.floor(t1_max / Te + 1e-9))
+        if k_max >= 1:
+            T1 = Te * np.arange(1, k_max + 1)
+            amp = np.abs(amplitude_table1("III", jerk_J1(L, T_SUM, T1, "III"), T1, T_SUM,
+                                          2 * math.pi * f))
+            return T_SUM, float(T1[int(np.argmin(amp))])
+        n += 1
+    raise RuntimeError("no feasible Sato profile")  # pragma: no cover
+
+
+def build_sato(ctx: PeerContext, name: str) -> tuple[PiecewiseJerk, PeerSpec]:
+    """Peer "Sato III": Condition III, T_SUM = the JL's motion time (longer if the limits ask).
+
+    T_1 (a whole number of samples) minimises eq. 28 at the end-of-motion frequency.
+    """
+    m, s = ctx.sc.move, ctx.sc.simulation
+    T_SUM, T1 = sato_design(m.distance, m.v_max, min(m.a_max, m.d_max), ctx.f_end, s.Te,
+                            ctx.motion_time_JL)
+    prof = sato_profile(abs(m.distance), T_SUM, T1, "III")
+    mot = placed(prof.motion(name=name), m.t_start, m.x0, ctx.sign)
+    return mot, PeerSpec(name, f"T_SUM = {T_SUM * 1e3:.0f} ms, T1 = {T1 * 1e3:.0f} ms "
+                               f"(eq. 28 minimised at {ctx.f_end:.4g} Hz)",
+                         {"T_SUM": T_SUM, "T1": T1, "f": ctx.f_end})

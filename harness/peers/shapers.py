@@ -47,6 +47,7 @@ from typing import Any
 
 import numpy as np
 
+from .context import PeerContext, PeerSpec
 from .trajectory import PiecewiseJerk, SampledTrajectory, from_fmu
 
 SHAPERS = ("ZV", "ZVD", "MZV", "EI")
@@ -278,3 +279,16 @@ def shaped_al(params: Mapping[str, Any], shaper: Shaper, *, quantize: bool = Fal
     Te = al.Te
     m = shape(al.to_motion(), shaper, Te=Te if quantize else None)
     return m.sample(Te, t0=float(al.t[0]))
+
+
+def build_shaped(ctx: PeerContext, name: str) -> tuple[PiecewiseJerk, PeerSpec]:
+    """Peers "AL*S" and "JL*S": the generator's AL or JL profile convolved with shaper S.
+
+    S (ZV, ZVD, MZV, EI) is designed for the tuned mode at the end of the motion.
+    """
+    sh = make_shaper(name[3:], ctx.f_end, ctx.zeta)
+    mot = shape(ctx.base(name[:2]), sh, name=name)
+    jl_txt = f"JL T_F {ctx.T_F_JL * 1e3:.0f} ms; " if name[:2] == "JL" else ""
+    return mot, PeerSpec(name, f"{jl_txt}{ctx.mode_text}; adds {sh.duration * 1e3:.0f} ms",
+                         {"f": ctx.f_end, "zeta": ctx.zeta, "A": sh.A.tolist(),
+                          "t": sh.t.tolist()})

@@ -65,6 +65,7 @@ from typing import Any
 
 import numpy as np
 
+from .context import PeerContext, PeerSpec
 from .trajectory import PiecewiseJerk
 
 __all__ = ["RULES", "TVDesign", "TimeVaryingZV", "design_for_scenario", "shape_time_varying",
@@ -425,3 +426,21 @@ def design_for_scenario(sc: Any, session: Any, base: Callable[[float], Piecewise
         corr += err
     assert mot is not None and shaper is not None
     return TVDesign(mot, ref, shaper, D + corr, corr, it, mismatch)
+
+
+def build_tv_shaped(ctx: PeerContext, name: str) -> tuple[PiecewiseJerk, PeerSpec]:
+    """Peers "AL*TV-ZV", "JL*TV-ZV": a time-varying ZV shaper along the synchronised Z move."""
+    prof = name[:2]
+    des = design_for_scenario(ctx.sc, ctx.session, lambda d: ctx.base(prof, d), name=name)
+    sh = des.shaper
+    d0 = float(sh.delay(des.base.t_start)[()])
+    d1 = float(sh.delay(des.base.t_end)[()])
+    jl_txt = f"JL T_F {ctx.T_F_JL * 1e3:.0f} ms; " if prof == "JL" else ""
+    return des.motion, PeerSpec(
+        name, f"{jl_txt}tuned mode f(z(t)) along the synchronised Z move, zeta = "
+              f"{ctx.zeta:g}; delay {d0 * 1e3:.1f} -> {d1 * 1e3:.1f} ms; {prof} planned for "
+              f"{des.distance_correction * 1e3:+.3g} mm so that the shaped move ends "
+              "on the target",
+        {"zeta": ctx.zeta, "rule": sh.rule, "delay_start": d0, "delay_end": d1,
+         "distance_correction": des.distance_correction,
+         "iterations": des.iterations, "sync_mismatch": des.sync_mismatch})

@@ -33,7 +33,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from .planner import MoveSamples, stage_starts
+from ..simulation.axis import MoveSamples, stage_starts
+from .methods import RULES
 
 __all__ = ["PlanFunction", "TuningResult", "sinc_residual", "tune_djl", "tune_jl"]
 
@@ -41,8 +42,6 @@ PlanFunction = Callable[[tuple[float, float, float, float]], tuple[MoveSamples,
                                                                    Callable[[float], float]]]
 """Plans the excited move for jerk times (T_F1..T_F4, s); returns its samples
 and z(t), the Z position (m) as a function of time (s)."""
-
-RULES = ("start", "phase")
 
 
 @dataclass
@@ -72,7 +71,7 @@ class TuningResult:
         Jerk times (samples) planned at each iteration, the last one included.
     converged : bool
         The last plan reproduced its own jerk times.
-    search : harness.optimize.SearchReport, optional
+    search : harness.tuning.search.SearchReport, optional
         For the ``optimal`` and ``robust`` methods: the residual (nominal and
         worst case) of the result and of JL, evaluations and time.
     """

@@ -1,4 +1,10 @@
-"""Sets of output files that replace the previous set whole, or not at all.
+"""Output files written whole: single files atomically, sets of files all or nothing.
+
+Single files (:func:`write_csv`, :func:`write_text`, :func:`save_figure`) are
+written to a temporary file beside the destination, then renamed over it: the
+destination holds the previous content or the new one, never a part.
+
+Sets of files (:class:`OutputSet`) replace the previous set whole, or not at all.
 
 A command's outputs (CSV, PNG, ``summary.txt``, FMUs, an HTML report) have
 fixed names in a folder that may hold other files.  No file system renames
@@ -34,6 +40,7 @@ as are the other files of the folder.
 from __future__ import annotations
 
 import contextlib
+import csv
 import json
 import os
 import shutil
@@ -41,7 +48,7 @@ import signal
 import stat
 import tempfile
 import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path, PurePosixPath
 from types import FrameType, TracebackType
 from typing import Any
@@ -51,8 +58,8 @@ try:
 except ImportError:  # pragma: no cover - not POSIX: no locking, stale folders ignored
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["TMP_PREFIX", "OutputSet", "Terminated", "recover_stale", "signals_deferred",
-           "sigterm_raises"]
+__all__ = ["TMP_PREFIX", "OutputSet", "Terminated", "recover_stale", "save_figure",
+           "signals_deferred", "sigterm_raises", "write_csv", "write_set", "write_text"]
 
 TMP_PREFIX = ".djl-fmu-tmp-"
 """Name prefix of the staging folders (in the output folder)."""
@@ -427,3 +434,84 @@ def write_set(base: str | os.PathLike[str], write: Callable[[OutputSet], None]) 
     with OutputSet(base) as o:
         write(o)
         return o.commit()
+
+
+# ------------------------------------------------------------- single files
+
+
+def _umask_mode() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
+def write_csv(path: str | os.PathLike[str], rows: Sequence[Mapping[str, Any]]) -> Path:
+    """Write dict rows as CSV atomically (temporary file, then rename).
+
+    Floats are written with 10 significant digits.
+
+    Parameters
+    ----------
+    path : path-like
+        Destination.
+    rows : sequence of mapping
+        Rows; the columns are the keys of the first row.
+
+    Returns
+    -------
+    Path
+    """
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", newline="", encoding="utf-8") as fh:
+            w = csv.DictWriter(fh, fieldnames=list(rows[0]) if rows else [])
+            w.writeheader()
+            for r in rows:
+                w.writerow({k: (f"{v:.10g}" if isinstance(v, float) else v) for k, v in r.items()})
+        os.chmod(tmp, _umask_mode())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def write_text(path: str | os.PathLike[str], text: str) -> Path:
+    """Write a text file atomically (a temporary file beside it, then rename); return its path.
+
+    The temporary file has a unique name (concurrent writers do not collide) and is
+    removed if writing fails or is interrupted: ``path`` holds the previous text or
+    the new one, never a part.
+    """
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
+            fh.write(text)
+        os.chmod(tmp, _umask_mode())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int = 110) -> Path:
+    """Save a matplotlib figure atomically (temporary file, then rename) and close it."""
+    import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
+
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        # PNG level 1: a third of the encoding time of the default, files ~15 % larger
+        fig.savefig(tmp, dpi=dpi, pil_kwargs={"compress_level": 1})
+        os.chmod(tmp, _umask_mode())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    finally:
+        plt.close(fig)
+    return path

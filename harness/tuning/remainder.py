@@ -49,12 +49,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-if TYPE_CHECKING:
-    from matplotlib.figure import Figure
+from ..scenario import Scenario
+from ..simulation.axis import stage_starts
+from ..simulation.master import CoSimResult
+from ..simulation.session import Session
+from .rule import TuningResult
 
-    from .cosim import CoSimResult, Session
-    from .scenario import Scenario
-    from .tuning import TuningResult
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure  # a type only: matplotlib is heavy to import
 
 __all__ = [
     "DRIFT_COEFFICIENT",
@@ -694,12 +696,9 @@ def move_phasors(session: Session, sc: Scenario, T_F: Sequence[float], profile: 
         The co-simulation (its ``free_amplitudes[mode]`` is the residual the
         phasors approximate).
     """
-    from .cosim import Session as _Session
-    from .planner import stage_starts
-
     i = sc.modemap.tune if mode is None else mode
     spec = sc.modemap.modes[i]
-    move = session.axis.sample(_Session.move_params(sc, profile, T_F))
+    move = session.axis.sample(Session.move_params(sc, profile, T_F))
     starts, _ = stage_starts(move)
     run = session.run(sc, profile, T_F)
     Te = sc.simulation.Te
@@ -734,7 +733,7 @@ def plot_jerk_times(results: Mapping[str, Sequence[TuningResult]], *, ax: Any = 
     ----------
     results : mapping of str to sequence of TuningResult
         Method name (e.g. ``"paper"``, ``"optimal"``, ``"robust"``) → the DJL
-        tunings of a set of moves (:meth:`harness.cosim.Session.tune`).  The x
+        tunings of a set of moves (:func:`harness.tuning.tune.tune_profile`).  The x
         value is ``TuningResult.periods`` (the local periods at the stage starts
         of the paper's plan, which the optimal and robust results carry).
     ax : matplotlib Axes, optional

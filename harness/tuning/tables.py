@@ -3,7 +3,7 @@
 ``djl-fmu tune`` (:mod:`harness.commands.tune`) and :func:`tune_table` tune the
 jerk times of JL and DJL for one move, every case of a ``[sweep]`` or every
 point of a ``[map]`` grid (Z start, Z travel, distance, v_max), with the
-methods of :mod:`harness.optimize` (DJL ``paper`` | ``optimal`` | ``robust``,
+methods of :mod:`harness.tuning.methods` (DJL ``paper`` | ``optimal`` | ``robust``,
 JL ``end`` | ``optimal``), measure the residual vibration each leaves (nominal
 and worst case over the stated map uncertainty) and export one row per move
 in a CSV file whose ``#`` header says what every column means and how a
@@ -25,7 +25,7 @@ Parallel runs and determinism
 
 Examples
 --------
->>> from harness.jerktimes import tune_table, load_jerk_times, fmu_parameters
+>>> from harness.tuning.tables import tune_table, load_jerk_times, fmu_parameters
 >>> tab = tune_table("X", djl_method="robust", max_moves=8, workers=2)  # doctest: +SKIP
 >>> tab.to_csv("X-jerk-times.csv")                                       # doctest: +SKIP
 >>> row = load_jerk_times("X-jerk-times.csv").nearest(0.0, 0.45, 0.4, 0.5)  # doctest: +SKIP
@@ -48,16 +48,23 @@ from collections.abc import Iterator, Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
+from tqdm import tqdm
 
-from . import __version__
-from .optimize import DJL_METHODS, JL_METHODS
-from .scenario import Scenario, load_scenario
-
-if TYPE_CHECKING:
-    from .cosim import Session
+from .. import __version__
+from ..errors import BatchError, MoveError
+from ..executors import describe_executor, executor_workers, make_executor, run_batches
+from ..files import write_text
+from ..fmu import spec
+from ..scenario import Scenario, load_scenario
+from ..simulation.session import Session
+from ..uncertainty import check_map_error
+from .methods import DJL_METHODS, JL_METHODS
+from .methods import parse_tuning as parse_pairs
+from .search import Objective
+from .tune import tune_profile
 
 __all__ = [
     "COLUMNS",
@@ -103,20 +110,20 @@ METHOD_MEANINGS = {
     "paper": "the modal period at the start of each stage (the paper's rule, "
              "Bearee & Olabi 2013 sec. 3.2; rule djl_rule of the scenario)",
     "optimal": "least residual vibration on the nominal mode map (pattern search over "
-               "whole samples on the time-varying model, harness.optimize)",
+               "whole samples on the time-varying model, harness.tuning.search)",
     "robust": "least worst-case residual vibration over the uncertainty below (pattern "
-              "search over whole samples on the time-varying model, harness.optimize)",
+              "search over whole samples on the time-varying model, harness.tuning.search)",
     "end": "the modal period at the end of the motion (the paper's JL)",
 }
 """What each tuning method minimises or follows (header of the CSV)."""
 
 
-class TuneError(RuntimeError):
+class TuneError(BatchError):
     """A table could not be computed: a move failed, or a worker died."""
 
 
-class MoveTuneError(RuntimeError):
-    """One move failed (raised in the worker; the message names the move)."""
+MoveTuneError = MoveError
+"""One move failed (raised in the worker; the message names the move): a :class:`MoveError`."""
 
 
 # ------------------------------------------------------------------ columns
@@ -214,14 +221,17 @@ _META_LINE = re.compile(r"^# ([A-Za-z_][A-Za-z0-9_]*): (.*)$")
 
 
 def parse_tuning(text: str | None) -> tuple[str, str]:
-    """Parse ``--tuning``: ``robust``, ``paper``, ``djl=optimal,jl=optimal``...
+    """Return the DJL and JL methods a ``--tuning`` value picks for a table.
+
+    The grammar is the one of every command (:func:`harness.tuning.methods.parse_tuning`):
+    comma-separated items ``METHOD``, ``djl=METHOD`` or ``jl=METHOD``.  A table
+    has one DJL and one JL column set, so it takes at most one method per
+    profile.
 
     Parameters
     ----------
     text : str, optional
-        Comma-separated items, each ``djl=METHOD``, ``jl=METHOD`` or a bare
-        method: a DJL method (``paper``, ``optimal``, ``robust``) sets DJL's,
-        ``end`` sets JL's.  None or empty: the defaults.
+        The value; None or empty: the defaults.
 
     Returns
     -------
@@ -232,39 +242,16 @@ def parse_tuning(text: str | None) -> tuple[str, str]:
     Raises
     ------
     ValueError
-        An unknown method or key, or a profile set twice.
+        An unknown method or key, or two methods for one profile.
     """
     got: dict[str, str] = {}
-    for raw in (text or "").split(","):
-        item = raw.strip()
-        if not item:
-            continue
-        if "=" in item:
-            key, _, value = (s.strip() for s in item.partition("="))
-            key = key.lower()
-            if key not in ("djl", "jl"):
-                raise ValueError(f"unknown profile {key!r} in {item!r}: write djl=METHOD or "
-                                 f"jl=METHOD")
-        else:
-            value = item
-            key = "djl" if value in DJL_METHODS else "jl" if value in JL_METHODS else "djl"
-        choices = DJL_METHODS if key == "djl" else JL_METHODS
-        if value not in choices:
-            raise ValueError(f"unknown {key.upper()} tuning method {value!r}: choose from "
-                             f"{', '.join(choices)}")
-        if key in got:
-            raise ValueError(f"the {key.upper()} method is given twice ({got[key]!r} and "
-                             f"{value!r})")
-        got[key] = value
-    return got.get("djl", DEFAULT_DJL_METHOD), got.get("jl", DEFAULT_JL_METHOD)
-
-
-def _check_map_error(map_error: float) -> float:
-    e = float(map_error)
-    if not (math.isfinite(e) and 0.0 <= e < 1.0):
-        raise ValueError(f"the map error must be in [0, 1) (a relative error, e.g. 0.1), got "
-                         f"{map_error!r}")
-    return e
+    for prof, method in parse_pairs(text):
+        if prof in got:
+            raise ValueError(f"a table has one {prof} method, {got[prof]!r} and {method!r} are "
+                             f"given (to compare methods, use 'djl-fmu simulate' or 'djl-fmu "
+                             f"map' with --tuning)")
+        got[prof] = method
+    return got.get("DJL", DEFAULT_DJL_METHOD), got.get("JL", DEFAULT_JL_METHOD)
 
 
 def with_methods(sc: Scenario, djl_method: str = DEFAULT_DJL_METHOD,
@@ -301,7 +288,7 @@ def with_methods(sc: Scenario, djl_method: str = DEFAULT_DJL_METHOD,
     if jl_method not in JL_METHODS:
         raise ValueError(f"unknown JL tuning method {jl_method!r}: choose from "
                          f"{', '.join(JL_METHODS)}")
-    e = _check_map_error(sc.compare.map_error if map_error is None else map_error)
+    e = check_map_error(sc.compare.map_error if map_error is None else map_error, "the map error")
     cmp = dataclasses.replace(sc.compare, djl_tuning=djl_method, jl_tuning=jl_method,
                               map_error=e, JL_T_F=None, DJL_T_F=None)
     cmp.tuning_options()  # checks the other options
@@ -336,17 +323,15 @@ def tune_move(case: Scenario, session: Session, index: int = 0) -> dict[str, Any
 
     Notes
     -----
-    The residuals are computed by :class:`harness.optimize.Objective`, the
+    The residuals are computed by :class:`harness.tuning.search.Objective`, the
     function the optimal and robust searches minimise: the free-oscillation
     amplitude when the reference ends, Z moving as in the scenario; the worst
     case is the largest over the frequency factors 1 + e of
-    :meth:`harness.optimize.TuningOptions.factors` and the damping factors.
+    :meth:`harness.tuning.methods.TuningOptions.factors` and the damping factors.
     """
-    from .optimize import Objective
-
     Te = case.simulation.Te
-    jl = session.tune(case, "JL")
-    djl = session.tune(case, "DJL")
+    jl = tune_profile(session, case, "JL")
+    djl = tune_profile(session, case, "DJL")
     if jl is None or djl is None:  # pragma: no cover - with_methods clears imposed ones
         raise ValueError("the scenario imposes jerk times (compare.JL_T_F / DJL_T_F)")
     opts = case.compare.tuning_options()
@@ -400,8 +385,6 @@ def _worker_session() -> Session:
     """Return the fast-engine session of this process and thread (created on first use)."""
     cur = getattr(_LOCAL, "session", None)
     if cur is None:
-        from .cosim import Session
-
         cur = _LOCAL.session = Session(engine="fast")
     return cur
 
@@ -454,7 +437,7 @@ def tune_batch(scenario: Scenario, start: int, points: Sequence[Point]) -> TuneB
 
     Raises
     ------
-    MoveTuneError
+    MoveError
         If a move fails; the message names it (index and values).
     """
     t0 = time.perf_counter()
@@ -465,7 +448,7 @@ def tune_batch(scenario: Scenario, start: int, points: Sequence[Point]) -> TuneB
             rows.append(tune_move(scenario.map_case(*p), session, start + k))
         except Exception as e:  # noqa: BLE001 (reported with the move, as plain text)
             close_worker_session()
-            raise MoveTuneError(f"move {start + k} (z0 = {p[0]:g} m, z_distance = {p[1]:g} m, "
+            raise MoveError(f"move {start + k} (z0 = {p[0]:g} m, z_distance = {p[1]:g} m, "
                                 f"distance = {p[2]:g} m, v_max = {p[3]:g} m/s) failed: "
                                 f"{type(e).__name__}: {e}") from None
     return TuneBatch(start, rows, time.perf_counter() - t0,
@@ -555,8 +538,6 @@ def tune_table(scenario: Scenario | str | Path, *, djl_method: str = DEFAULT_DJL
     TuneError
         A move failed (the message names it) or a worker died.
     """
-    from .executors import executor_workers, make_executor
-
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     sc = with_methods(sc, djl_method, jl_method, map_error)
     kind, points, total = _grid(sc, max_moves, single)
@@ -575,22 +556,16 @@ def tune_table(scenario: Scenario | str | Path, *, djl_method: str = DEFAULT_DJL
 
 
 def _where(ex: Executor, scheduler: str | None) -> str:
-    from .workspace import _describe_executor
-
-    return _describe_executor(ex, scheduler)
+    return describe_executor(ex, scheduler)
 
 
 def _run_on(sc: Scenario, kind: str, points: list[Point], total: int, bs: int, ex: Executor,
             n_workers: int, where: str, progress: bool) -> JerkTimeTable:
-    from .executors import run_batches
-
     bar = None
     if progress and len(points) > 1 and sys.stderr.isatty():
-        from tqdm import tqdm
-
         bar = tqdm(total=len(points), desc=f"tune {sc.name}", unit="move", leave=False)
     batches, wall = run_batches(ex, tune_batch, (sc,), points, bs, error=TuneError,
-                                passthrough=MoveTuneError, progress=bar,
+                                passthrough=MoveError, progress=bar,
                                 on_serial_end=close_worker_session)
     rows = [r for br in batches for r in br.rows]
     assert len(rows) == len(points)
@@ -637,7 +612,7 @@ def _header(sc: Scenario, kind: str, n: int, total: int) -> list[str]:
     out = [
         MAGIC[2:],
         f"format: {FORMAT}",
-        f"generated_by: djl-fmu {__version__} (djl-fmu tune; harness.jerktimes)",
+        f"generated_by: djl-fmu {__version__} (djl-fmu tune; harness.tuning.tables)",
         f"scenario: {sc.name}",
         f"source: {sc.source}",
     ]
@@ -685,7 +660,7 @@ def _header(sc: Scenario, kind: str, n: int, total: int) -> list[str]:
         "limit lowered to z_v_max_m_s (JL: jl_z_v_max_m_s) so that it ends with the move.",
         "  For another move take the nearest row, or tune that move: jerk times interpolated "
         "between rows are not checked.",
-        "  Python: harness.jerktimes.load_jerk_times(path) reads this file, "
+        "  Python: harness.tuning.tables.load_jerk_times(path) reads this file, "
         ".nearest(z0, z_distance, distance, v_max) picks a row, fmu_parameters(row, 'DJL') "
         "gives the start values.",
         "  Other tools: skip the lines that start with '#'; the first other line is the "
@@ -789,8 +764,6 @@ class JerkTimeTable:
 
     def to_csv(self, path: str | Path) -> Path:
         """Write the CSV file atomically (temporary file, then rename); return its path."""
-        from .results import write_text
-
         return write_text(path, self.to_text())
 
     # ---------------------------------------------------------- lookup
@@ -1001,10 +974,6 @@ def load_jerk_times(path: str | Path) -> JerkTimeTable:
     return JerkTimeTable(rows, comments, columns=columns)
 
 
-PROFILE_CODES = {"AL": 1, "JL": 2, "DJL": 3}
-"""The FMU's ``profile`` parameter."""
-
-
 def fmu_parameters(row: dict[str, Any], profile: str = "DJL") -> dict[str, Any]:
     """Start values of the generator FMU for one row of a jerk-time table.
 
@@ -1023,7 +992,7 @@ def fmu_parameters(row: dict[str, Any], profile: str = "DJL") -> dict[str, Any]:
         ``profile``, ``Te``, ``t_start``, ``x0``, ``distance``, ``v_max``,
         ``a_max``, ``d_max``, ``short_stage``, ``T_F1`` .. ``T_F4``: the
         excited axis' parameters, exactly those the harness gives the FMU
-        (:meth:`harness.cosim.Session.move_params`).
+        (:meth:`harness.simulation.session.Session.move_params`).
 
     Raises
     ------
@@ -1033,7 +1002,7 @@ def fmu_parameters(row: dict[str, Any], profile: str = "DJL") -> dict[str, Any]:
     if profile not in ("DJL", "JL"):
         raise ValueError(f"profile must be 'DJL' or 'JL', got {profile!r}")
     p: dict[str, Any] = {
-        "profile": PROFILE_CODES[profile], "Te": float(row["Te_s"]),
+        "profile": spec.PROFILE_CODES[profile], "Te": float(row["Te_s"]),
         "t_start": float(row["t_start_s"]), "x0": float(row["x0_m"]),
         "distance": float(row["distance_m"]), "v_max": float(row["v_max_m_s"]),
         "a_max": float(row["a_max_m_s2"]), "d_max": float(row["d_max_m_s2"]),

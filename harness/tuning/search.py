@@ -1,12 +1,12 @@
 """Jerk times tuned on the time-varying model: ``optimal`` and ``robust`` (issue #9).
 
-The paper's rule (:func:`harness.tuning.tune_djl`: each jerk time = the modal
+The paper's rule (:func:`harness.tuning.rule.tune_djl`: each jerk time = the modal
 period at the start of its stage) cancels each stage's vibration only to first
 order: damping leaves a remainder per stage, the mode drifts within a stage,
 and the four remainders add with phases set by the stage timings.  Here the
 jerk times are instead chosen by minimising the residual vibration itself,
 computed on the scheduled plant with the Z motion (the fast engine,
-:mod:`harness.engine`), over whole samples N_F1..N_F4:
+:mod:`harness.simulation.fast_axis`), over whole samples N_F1..N_F4:
 
 * ``optimal`` — the smallest residual on the nominal mode map;
 * ``robust`` — the smallest *worst* residual over a stated uncertainty: the
@@ -38,107 +38,25 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from .cosim import Session
-    from .scenario import Scenario
-    from .tuning import TuningResult
+from ..plant import hermite_mid
+from ..scenario import Scenario
+from ..simulation.session import Session
+from .methods import TuningOptions
+from .rule import TuningResult
 
 __all__ = [
-    "DJL_METHODS",
-    "JL_METHODS",
-    "VARIANTS",
-    "split_profile",
+    "STEPS",
     "Objective",
-    "TuningOptions",
+    "SearchReport",
     "pattern_search",
     "tune_optimal",
 ]
 
-DJL_METHODS = ("paper", "optimal", "robust")
-"""DJL tuning methods: the paper's rule (stage starts), minimum residual, minimum worst case."""
-
-JL_METHODS = ("end", "optimal")
-"""JL tuning methods: the period at the end of the motion (the paper's), minimum residual."""
-
 STEPS = (16, 8, 4, 2, 1)
 """Pattern-search step sizes (samples)."""
-
-VARIANTS = ("JL-optimal", "DJL-paper", "DJL-optimal", "DJL-robust")
-"""Profile names that carry their tuning method: ``<profile>-<method>`` (e.g. in
-``[compare] profiles``, next to ``JL`` and ``DJL`` which follow ``jl_tuning`` /
-``djl_tuning``)."""
-
-
-def split_profile(name: str) -> tuple[str, str | None]:
-    """Split a profile name into the generator profile and the tuning method it imposes.
-
-    ``"DJL-robust"`` → ``("DJL", "robust")``; ``"JL"`` → ``("JL", None)``.
-
-    Raises
-    ------
-    ValueError
-        If the name is neither AL, JL, DJL nor one of :data:`VARIANTS`.
-    """
-    if name in ("AL", "JL", "DJL"):
-        return name, None
-    if name in VARIANTS:
-        base, method = name.split("-", 1)
-        return base, method
-    raise ValueError(f"unknown profile {name!r}: AL, JL, DJL or one of {', '.join(VARIANTS)}")
-
-
-@dataclass(frozen=True)
-class TuningOptions:
-    """What the ``optimal`` / ``robust`` searches may do.
-
-    Attributes
-    ----------
-    map_error : float
-        Robust: the whole map f(z) is scaled by 1 + e for e in
-        [−map_error, +map_error] (a grid 1 % apart, at least 21 points).
-    damping : tuple of float, optional
-        Robust: every mode's damping ratio is also scaled by each of these
-        factors (e.g. ``(0.5, 1.0, 2.0)``); default: nominal damping only.
-    max_motion_time : float or "JL", optional
-        The motion may not last longer than this (s), or than JL's motion.
-        Default: no bound.
-    period_band : float
-        Each jerk time stays within [(1 − b)·P_i, (1 + b)·P_i], P_i the modal
-        period at the start of stage i (the paper's value); JL's jerk times are
-        always allowed (they are the fallback).
-    """
-
-    map_error: float = 0.1
-    damping: tuple[float, ...] | None = None
-    max_motion_time: float | str | None = None
-    period_band: float = 0.5
-
-    def __post_init__(self) -> None:
-        if not (math.isfinite(self.map_error) and 0.0 <= self.map_error < 1.0):
-            raise ValueError(f"map_error must be in [0, 1), got {self.map_error!r}")
-        if self.damping is not None and (not self.damping or not all(
-                math.isfinite(d) and d > 0 for d in self.damping)):
-            raise ValueError(f"damping factors must be finite numbers > 0, got {self.damping!r}")
-        if isinstance(self.max_motion_time, str):
-            if self.max_motion_time != "JL":
-                raise ValueError("max_motion_time must be a time in s or 'JL', got "
-                                 f"{self.max_motion_time!r}")
-        elif self.max_motion_time is not None and not (
-                math.isfinite(self.max_motion_time) and self.max_motion_time > 0):
-            raise ValueError(f"max_motion_time must be > 0 s, got {self.max_motion_time!r}")
-        if not (math.isfinite(self.period_band) and 0.0 < self.period_band <= 10.0):
-            raise ValueError(f"period_band must be in (0, 10], got {self.period_band!r}")
-
-    def factors(self) -> np.ndarray:
-        """Frequency factors 1 + e of the robust objective."""
-        if self.map_error == 0.0:
-            return np.ones(1)
-        n = max(10, math.ceil(round(self.map_error / 0.01, 9)))
-        return 1.0 + np.linspace(-self.map_error, self.map_error, 2 * n + 1)
 
 
 class Objective:
@@ -149,7 +67,7 @@ class Objective:
     sc : Scenario
         A single-move scenario.
     session : Session
-        A fast-engine session (``Session(engine="fast")``).
+        A session; the searches run on its fast engine (:meth:`Session.fast`).
     profile : {"JL", "DJL"}
         The profile whose jerk times are searched.
 
@@ -161,8 +79,7 @@ class Objective:
     """
 
     def __init__(self, sc: Scenario, session: Session, profile: str) -> None:
-        if getattr(session, "engine", "") != "fast":
-            raise ValueError("the tuning searches run on the fast engine: Session(engine='fast')")
+        session = session.fast()
         if profile not in ("JL", "DJL"):
             raise ValueError(f"profile must be JL or DJL, got {profile!r}")
         self.sc, self.session, self.profile = sc, session, profile
@@ -192,7 +109,7 @@ class Objective:
             k_end = int(math.ceil(t_end / self.h - 1e-9))
             Z = s.z_axis.samples(0, int(round(self.h / s.z_axis.planned.Te)), k_end + 1)
             z, v_z = Z[0], Z[1]
-            zm = 0.5 * (z[:-1] + z[1:]) + (0.125 * self.h) * (v_z[:-1] - v_z[1:])
+            zm = hermite_mid(z[:-1], v_z[:-1], z[1:], v_z[1:], self.h)
             f_mid = np.ascontiguousarray(np.vstack([m.f_array(zm) for m in self.modes]))
             f_end = np.array([float(m.f_of_z(float(z[k_end]))) for m in self.modes])
             got = (k_end, f_mid, f_end)
@@ -322,7 +239,7 @@ def _starts(paper: tuple[int, ...] | None, n_jl: int, every_mix: bool = True
 
 @dataclass
 class SearchReport:
-    """How a tuned result was found (kept on :class:`harness.tuning.TuningResult`)."""
+    """How a tuned result was found (kept on :class:`harness.tuning.rule.TuningResult`)."""
 
     method: str
     nominal: float
@@ -349,7 +266,7 @@ def tune_optimal(sc: Scenario, session: Session, profile: str, method: str,
     sc : Scenario
         A single-move scenario.
     session : Session
-        A fast-engine session.
+        A session (the search runs on its fast engine, :meth:`Session.fast`).
     profile : {"JL", "DJL"}
         The profile tuned.
     method : {"optimal", "robust"}
@@ -370,8 +287,6 @@ def tune_optimal(sc: Scenario, session: Session, profile: str, method: str,
     TuningResult
         ``rule`` is ``method``; ``search`` holds a :class:`SearchReport`.
     """
-    from .tuning import TuningResult
-
     if method not in ("optimal", "robust"):
         raise ValueError(f"method must be 'optimal' or 'robust', got {method!r}")
     opts = options or TuningOptions()

@@ -1,0 +1,64 @@
+"""The harness's errors: one base, :class:`HarnessError`.
+
+Every error the harness raises on purpose derives from :class:`HarnessError`,
+so a script can catch them all with one ``except``; each also keeps the
+built-in base its callers already catch (``ValueError`` for bad input,
+``RuntimeError`` for a failure while running).  Where each is raised:
+
+========================  ===========================  ========================================
+error                     built-in base                raised by
+========================  ===========================  ========================================
+``ScenarioError``         ValueError                   :mod:`harness.scenario` (file, key, value)
+``FMUError``              RuntimeError                 :mod:`harness.fmu.runner` (an FMI call)
+``BuildError``            RuntimeError                 :mod:`harness.fmu.build` (compiler, sources)
+``PlanError``             ValueError                   :mod:`harness.simulation.fast_axis`
+``ExecutorError``         ValueError                   :mod:`harness.executors` (workers, cluster)
+``BatchError``            RuntimeError                 a map or a table of moves did not complete
+``MoveError``             RuntimeError                 one move of such a batch (names the move)
+``CommandError``          --                           :mod:`harness.commands` (exit status)
+``RuckigMissingError``    ImportError                  :mod:`harness.peers.ruckig_ref`
+========================  ===========================  ========================================
+
+The names that the earlier modules used for the batch errors stay available:
+``WorkspaceMapError`` / ``MapError`` (:mod:`harness.workspace`) and
+``TuneError`` (:mod:`harness.tuning.tables`) are :class:`BatchError` subclasses.
+"""
+
+from __future__ import annotations
+
+__all__ = ["BatchError", "BuildError", "CommandError", "HarnessError", "MoveError"]
+
+
+class HarnessError(Exception):
+    """Base of every error the harness raises on purpose."""
+
+
+class BatchError(HarnessError, RuntimeError):
+    """A batch of moves (a workspace map, a table of jerk times) did not complete.
+
+    A move failed, or a worker died; the message names the move when one did.
+    """
+
+
+class MoveError(BatchError):
+    """One move of a batch failed (raised in the worker; the message names the move)."""
+
+
+class BuildError(HarnessError, RuntimeError):
+    """The FMU cannot be built: the compiler failed, or the sources are incomplete."""
+
+
+class CommandError(HarnessError):
+    """A command stops: ``status`` is its exit status, the message says why.
+
+    Parameters
+    ----------
+    status : int
+        Exit status of the command (1 a failure, 2 bad arguments).
+    message : str
+        What went wrong, for the user.
+    """
+
+    def __init__(self, status: int, message: str) -> None:
+        super().__init__(message)
+        self.status = status
