@@ -254,7 +254,7 @@ def connect(address: str, *, timeout: float | None = None) -> Any:
     if not isinstance(address, str) or not address.strip():
         raise ExecutorError(f"bad Dask scheduler address {address!r} (e.g. tcp://host:8786)")
     try:
-        from distributed import Client
+        from distributed import Client  # deferred: dask.distributed is heavy to import
     except ImportError as e:  # pragma: no cover (a dependency of the package)
         raise ExecutorError(f"cannot use the Dask scheduler {address}: dask.distributed is "
                             f"not installed ({e})") from None

@@ -27,12 +27,11 @@ import math
 import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from .plant import Mode
+from .plant import Mode, free_amplitude
+
 
 __all__ = [
     "DEFAULT_SETTLE_BAND",
@@ -79,8 +78,6 @@ def residual_amplitude(states: Iterable[tuple[float, float]], modes: Iterable[Mo
     float
         Σ amplitudes (m).
     """
-    from .plant import free_amplitude
-
     return float(sum(free_amplitude(float(e), float(de), m)
                      for (e, de), m in zip(states, modes, strict=True)))
 

@@ -371,7 +371,7 @@ class ModeMap:
 
     def plot(self, z: Sequence[float] | np.ndarray | None = None, ax=None):
         """Plot f(z) of every mode; return the figure."""
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         if ax is None:
             fig, ax = plt.subplots(figsize=(6, 3.5))

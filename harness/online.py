@@ -662,7 +662,7 @@ class OnlineResult:
 
     def plot(self, title: str | None = None):
         """Figure: x, v, a, j; stage and f_mode; deflection; z; return it."""
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         on_label = self.online_label
         runs = {self.offline_profile: (self.offline, self.metrics[self.offline_profile]),

@@ -60,7 +60,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:  # python-control and scipy.signal take ~1.5 s to import: loaded on use
-    import control as ct
+    import control as ct  # deferred: python-control is heavy to import
 
 __all__ = [
     "Mode",
@@ -139,7 +139,7 @@ def mode_ss(mode: Mode) -> ct.StateSpace:
     control.StateSpace
         Continuous-time, named signals ``qdd`` → ``eps``.
     """
-    import control as ct
+    import control as ct  # deferred: python-control is heavy to import
 
     w = mode.omega
     A = [[0.0, 1.0], [-w * w, -2.0 * mode.zeta * w]]
@@ -160,7 +160,7 @@ def axis_ss(modes: Sequence[Mode]) -> ct.StateSpace:
     control.StateSpace
         2·len(modes) states (ε_i, ε̇_i), input ``qdd``, output ``eps``.
     """
-    import control as ct
+    import control as ct  # deferred: python-control is heavy to import
 
     if not modes:
         raise ValueError("at least one mode is needed")
@@ -313,7 +313,7 @@ class ModeResponse:
 
     def plot(self, title: str | None = None):
         """Plot ε(t) and f(t); return the figure."""
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         fig, (ax1, ax2) = plt.subplots(2, 1, sharex=True, figsize=(8, 5))
         ax1.plot(self.t, self.eps * 1e3)
@@ -330,7 +330,7 @@ class ModeResponse:
 
 def _lti_response(a: np.ndarray, h: float, mode: Mode, eps0: float, deps0: float):
     """Exact response for a constant mode, vectorised with lfilter."""
-    from scipy.signal import lfilter
+    from scipy.signal import lfilter  # deferred: scipy is heavy to import
 
     w = mode.omega
     p11, p12, p21, p22 = transition(w, mode.zeta, h)

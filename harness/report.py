@@ -331,7 +331,7 @@ def write_report(path: str | os.PathLike = "report.html", *, fast: bool = False,
     -------
     ReportSummary
     """
-    import matplotlib
+    import matplotlib  # deferred: matplotlib is heavy to import
 
     matplotlib.use("Agg")
     t0 = time.perf_counter()

@@ -592,7 +592,7 @@ class SweepResult:
 
     def plot(self, title: str | None = None):
         """Per distinct move: residual of DJL against JL, and the % changes; return the figure."""
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         cases = self.distinct()
         fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(13, 5.5))

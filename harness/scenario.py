@@ -103,7 +103,7 @@ from .errors import HarnessError
 from .fmu.runner import check_fmu_binary, check_fmu_variables
 from .metrics import DEFAULT_SETTLE_BAND, SettleBand, parse_settle_band
 from .modemap import CantileverLaw, ConstantLaw, LinearLaw, ModeMap, ModeSpec, TableLaw
-from .tuning.methods import DJL_METHODS, JL_METHODS, RULES, VARIANTS, TuningOptions
+from .tuning_options import DJL_METHODS, JL_METHODS, RULES, VARIANTS, TuningOptions
 
 __all__ = [
     "CompareSpec",
@@ -248,7 +248,7 @@ class CompareSpec:
     period_band: float = 0.5
 
     def tuning_options(self) -> TuningOptions:
-        """Return the :class:`harness.tuning.methods.TuningOptions` of this table."""
+        """Return the :class:`harness.tuning_options.TuningOptions` of this table."""
         return TuningOptions(self.map_error, self.damping, self.max_motion_time,
                              self.period_band)
 

@@ -520,14 +520,14 @@ class WorkspaceMap:
         first = next(iter(figs))
         for k, f in figs.items():
             if k != first:
-                import matplotlib.pyplot as plt
+                import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
                 plt.close(f)
         return figs[first]
 
     def _heatmaps(self, arr: np.ndarray, what: str, unit: str, diverging: bool) -> Any:
-        import matplotlib.pyplot as plt
-        from matplotlib import colors
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
+        from matplotlib import colors  # deferred: matplotlib is heavy to import
 
         z0s, dzs, ds, vs = (np.asarray(a, dtype=float) for a in self.scenario.map_axes())
         # slices with data only (a map cut by max_moves fills the first z0 slices)

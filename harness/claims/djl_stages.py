@@ -98,8 +98,8 @@ class ScenarioStages:
 
     def plot(self):
         """Bode of the axis at each stage start with the stage notches; f(t) and residuals."""
-        import control as ct
-        import matplotlib.pyplot as plt
+        import control as ct  # deferred: python-control is heavy to import
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         fig, axes = plt.subplots(1, 2, figsize=(13, 4.6))
         ax = axes[0]

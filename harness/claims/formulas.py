@@ -374,7 +374,7 @@ def biquad_inverse_tf(omega1: float, zeta1: float, tau_a: float, tau_b: float):
     scale a position reference by ``omega^2``.  As a trajectory prefilter it
     must pass the final position unchanged, so we divide by ``omega^2``.
     """
-    import control as ct
+    import control as ct  # deferred: python-control is heavy to import
 
     num = np.array([1.0, 2 * zeta1 * omega1, omega1**2]) / omega1**2
     den = np.polymul([tau_a, 1.0], [tau_b, 1.0])
@@ -383,14 +383,14 @@ def biquad_inverse_tf(omega1: float, zeta1: float, tau_a: float, tau_b: float):
 
 def notch_tf(omega_a: float, omega_b: float, Q: float):
     """Notch filter of 003 eq. (19): ``(s^2 + omega_a^2) / (s^2 + omega_b/Q s + omega_b^2)``."""
-    import control as ct
+    import control as ct  # deferred: python-control is heavy to import
 
     return ct.tf([1.0, 0.0, omega_a**2], [1.0, omega_b / Q, omega_b**2])
 
 
 def mode_tf(omega1: float, zeta1: float):
     """003 eq. (4): ``epsilon / q'' = -1 / (s^2 + 2 zeta omega s + omega^2)``."""
-    import control as ct
+    import control as ct  # deferred: python-control is heavy to import
 
     return ct.tf([-1.0], [1.0, 2 * zeta1 * omega1, omega1**2])
 

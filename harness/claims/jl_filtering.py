@@ -94,7 +94,7 @@ class JLFilterAnalysis:
 
     def plot(self):
         """Time-domain overlay and spectra of the first move."""
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         m = self.moves[0]
         fig, axes = plt.subplots(2, 2, figsize=(11, 7))

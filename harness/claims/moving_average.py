@@ -86,8 +86,8 @@ class MovingAverageAnalysis:
 
     def plot(self):
         """Bode (python-control) and impulse responses of the first case."""
-        import control as ct
-        import matplotlib.pyplot as plt
+        import control as ct  # deferred: python-control is heavy to import
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         c = self.cases[0]
         fig, axes = plt.subplots(2, 2, figsize=(11, 7))
@@ -135,7 +135,7 @@ class MovingAverageAnalysis:
 def analyse_case(settings: Settings, T_F: float, Te: float = 1e-3, n_notch: int = 5
                  ) -> MovingAverageCase:
     """Measure the FMU's moving average for jerk time ``T_F``."""
-    import control as ct
+    import control as ct  # deferred: python-control is heavy to import
 
     traj = settings.generate({"profile": 2, "Te": Te, "distance": 0.4, "v_max": 1.0,
                               "a_max": 10.0, "d_max": 10.0, "T_F1": T_F, "v0": 0.0,
@@ -230,7 +230,7 @@ def _checks(c: MovingAverageCase) -> list[Check]:
         note="bound (1/sin x - 1/x)/N at x = 0.1 pi (sampling effect)"))
     # Side lobes of sinc: peaks where tan x = x (x = pi f T_F), value 1/sqrt(1 + x^2),
     # just under the envelope 1/x.
-    from scipy.optimize import brentq
+    from scipy.optimize import brentq  # deferred: scipy is heavy to import
 
     x_p = np.array([brentq(lambda x: np.sin(x) - x * np.cos(x), k * np.pi + 1e-9,
                            k * np.pi + np.pi / 2 - 1e-9) for k in range(1, len(c.side_lobes) + 1)])

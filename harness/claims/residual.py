@@ -85,7 +85,7 @@ class ResidualAnalysis:
 
     def plot(self):
         """Fig. 11 (formula curves + FMU/plant points), map, and move residuals."""
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         T = 1.0 / self.f_mode
         w = 2 * np.pi * self.f_mode

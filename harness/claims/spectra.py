@@ -86,7 +86,7 @@ class SpectraAnalysis:
 
     def plot(self):
         """Fig. 3-5: accelerations and spectra (closed forms as lines, FFTs as dots)."""
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         fig, axes = plt.subplots(3, 2, figsize=(11, 10))
         groups = [

@@ -126,7 +126,7 @@ class TimeVaryingAnalysis:
 
     def plot(self):
         """Fig. 12: residual after the stage vs the frequency variation."""
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
         for law in LAWS:

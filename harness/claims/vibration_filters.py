@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..plant import Mode, free_amplitude, simulate_mode
+from ..plant import Mode, free_amplitude, mode_ss, simulate_mode
 from . import formulas as fm
 from .base import Check, ClaimResult, Settings, Table, register
 from .signals import db, refine_minimum
@@ -90,8 +90,8 @@ class FilterAnalysis:
 
     def plot(self):
         """Bode magnitudes, step responses, and the shaped AL moves' residuals."""
-        import control as ct
-        import matplotlib.pyplot as plt
+        import control as ct  # deferred: python-control is heavy to import
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         fig, axes = plt.subplots(1, 3, figsize=(14, 4.4))
         ax = axes[0]
@@ -144,9 +144,8 @@ class FilterAnalysis:
 
 def _series_ss(filt, mode: Mode):
     """Filter then mode, one state space: input q'' (m/s²), outputs eps, eps' and the states."""
-    import control as ct
+    import control as ct  # deferred: python-control is heavy to import
 
-    from ..plant import mode_ss
 
     fs = ct.ss(filt)
     ms = mode_ss(mode)
@@ -159,7 +158,7 @@ def _series_ss(filt, mode: Mode):
 
 def _mode_state_zoh(sys, t: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(eps, eps') of ``sys`` for a piecewise-constant input (exact ZOH discretisation)."""
-    import control as ct
+    import control as ct  # deferred: python-control is heavy to import
 
     dsys = ct.sample_system(sys, t[1] - t[0], method="zoh")
     r = ct.forced_response(dsys, t, u)
@@ -176,7 +175,7 @@ def _settling(t: np.ndarray, y: np.ndarray, band: float = 0.02) -> float:
 
 def analyse(settings: Settings) -> FilterAnalysis:
     """Build the filters, take their Bode and step responses, shape the FMU's AL move."""
-    import control as ct
+    import control as ct  # deferred: python-control is heavy to import
 
     omega1 = 2 * np.pi * F_D / np.sqrt(1 - ZETA**2)
     mode = Mode(omega1 / (2 * np.pi), ZETA)

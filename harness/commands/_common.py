@@ -26,8 +26,8 @@ from typing import Any
 from ..errors import CommandError
 from ..files import OutputSet, Terminated, sigterm_raises
 from ..scenario import ScenarioError, load_scenario
-from ..tuning.methods import DJL_METHODS, JL_METHODS, variants_of
-from ..tuning.methods import parse_tuning as parse_tuning_pairs
+from ..tuning_options import DJL_METHODS, JL_METHODS, variants_of
+from ..tuning_options import parse_tuning as parse_tuning_pairs
 from ..uncertainty import check_map_error
 
 __all__ = ["CommandError", "add_engine_option", "add_fmu_options", "add_map_error_option",
@@ -100,7 +100,7 @@ def add_engine_option(p: argparse.ArgumentParser, default: str | None,
 TUNING_GRAMMAR = ("comma-separated METHOD, djl=METHOD or jl=METHOD; DJL methods: "
                   + ", ".join(DJL_METHODS) + "; JL methods: " + ", ".join(JL_METHODS)
                   + " (a bare method is DJL's, 'end' JL's)")
-"""The one grammar of ``--tuning`` (:func:`harness.tuning.methods.parse_tuning`)."""
+"""The one grammar of ``--tuning`` (:func:`harness.tuning_options.parse_tuning`)."""
 
 
 def add_tuning_option(p: argparse.ArgumentParser, use: str) -> None:

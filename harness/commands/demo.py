@@ -102,7 +102,7 @@ def _demo(o: OutputSet, no_plot: bool, quiet: bool = False) -> bool:
         import matplotlib  # deferred: matplotlib is heavy to import
 
         matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         fig = d.plot(title="Default DJL move (T_F = 80/80/60/50 ms) with its AL input")
         for ax, name in zip(fig.axes, ("x", "v", "a", "j"), strict=True):

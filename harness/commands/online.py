@@ -16,7 +16,7 @@ from ..online import (
 )
 from ..simulation.axis import samples_per_step
 from ..simulation.session import Session
-from ..tuning.methods import DJL_METHODS
+from ..tuning_options import DJL_METHODS
 from ._common import (
     CommandError,
     add_fmu_options,

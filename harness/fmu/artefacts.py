@@ -245,10 +245,10 @@ stepSize="{spec.DEFAULT_TE!r}">
 
 def default_move_plot(path: Path, time: Sequence[float], rows: Sequence[Sequence[float]]) -> None:
     """Draw x, v, a and j of the default move into ``path`` (PNG)."""
-    import matplotlib
+    import matplotlib  # deferred: matplotlib is heavy to import
 
     matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
     fig, axes = plt.subplots(4, 1, figsize=(6.4, 6.4), sharex=True)
     units = ("m", "m/s", "m/s²", "m/s³")

@@ -19,6 +19,7 @@ import math
 import shutil
 import tempfile
 import weakref
+import zipfile
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -27,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from . import spec
+from .build import default_fmu
 
 REAL_OUTPUTS = ("x", "v", "a", "j", "x_AL", "v_AL", "a_AL")
 """Real outputs recorded by :func:`generate`, in this order."""
@@ -93,8 +95,6 @@ def check_fmu_archive(path: str | Path) -> None:
         :data:`MAX_FMU_ENTRIES` files, an unsafe member name, or a declared
         unpacked size above :data:`MAX_FMU_UNPACKED`.
     """
-    import zipfile
-
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"{path}: no such FMU file")
@@ -170,10 +170,8 @@ def check_fmu_binary(path: str | Path) -> None:
         Naming the file: no co-simulation interface, no binary for this
         platform, or a binary that cannot be loaded (corrupt, wrong architecture).
     """
-    import zipfile
-
     import fmpy  # deferred: fmpy is heavy to import
-    from fmpy import read_model_description
+    from fmpy import read_model_description  # deferred: fmpy is heavy to import
 
     path = Path(path)
     check_fmu_archive(path)
@@ -211,7 +209,7 @@ def check_fmu_binary(path: str | Path) -> None:
 
 def _read_fmu(path: Path) -> Any:
     """Check the archive and read its model description; ``ValueError`` naming the file."""
-    from fmpy import read_model_description
+    from fmpy import read_model_description  # deferred: fmpy is heavy to import
 
     check_fmu_archive(path)
     try:
@@ -260,11 +258,9 @@ class GeneratorFMU:
         debug_logging: bool = False,
         echo: bool = False,
     ) -> None:
-        from fmpy import extract
+        from fmpy import extract  # deferred: fmpy is heavy to import
 
         if fmu is None:
-            from .build import default_fmu
-
             fmu = default_fmu(fmi_version)
         self.path = Path(fmu)
         self.log: list[LogRecord] = []
@@ -302,7 +298,7 @@ class GeneratorFMU:
 
     def _check_binary(self) -> None:
         """Raise ``ValueError`` unless the FMU has a binary for this platform that loads."""
-        import fmpy
+        import fmpy  # deferred: fmpy is heavy to import
 
         cs = self.md.coSimulation
         if cs is None:
@@ -319,7 +315,7 @@ class GeneratorFMU:
             raise ValueError(f"{self.path}: the FMU's binary binaries/{plat}/{lib.name} cannot "
                              f"be loaded: {str(e).replace(str(lib) + ': ', '')}") from None
         try:
-            from fmpy import freeLibrary
+            from fmpy import freeLibrary  # deferred: fmpy is heavy to import
 
             freeLibrary(ctypes.c_void_p(handle._handle))
         except Exception:  # noqa: BLE001
@@ -339,8 +335,8 @@ class GeneratorFMU:
         if cs is None:
             raise ValueError(f"{self.path}: not a co-simulation FMU")
         if self.fmi_version == 2:
-            from fmpy import calloc, free
-            from fmpy.fmi2 import (
+            from fmpy import calloc, free  # deferred: fmpy is heavy to import
+            from fmpy.fmi2 import (  # deferred: fmpy is heavy to import
                 FMU2Slave,
                 fmi2CallbackAllocateMemoryTYPE,
                 fmi2CallbackFreeMemoryTYPE,
@@ -361,7 +357,7 @@ class GeneratorFMU:
             self._callbacks = cb  # keep alive
             self.fmu.instantiate(callbacks=cb, loggingOn=debug_logging)
         else:
-            from fmpy.fmi3 import FMU3Slave
+            from fmpy.fmi3 import FMU3Slave  # deferred: fmpy is heavy to import
 
             self.fmu = FMU3Slave(guid=self.md.guid, unzipDirectory=self._unzipped,
                                  modelIdentifier=cs.modelIdentifier, instanceName=name)
@@ -378,7 +374,7 @@ class GeneratorFMU:
 
     def _call(self, fn: Any, *args: Any, **kwargs: Any) -> Any:
         """Call an fmpy method; turn an FMI error into :class:`FMUError` with the log."""
-        from fmpy.fmi1 import FMICallException
+        from fmpy.fmi1 import FMICallException  # deferred: fmpy is heavy to import
 
         try:
             return fn(*args, **kwargs)
@@ -502,7 +498,7 @@ class GeneratorFMU:
             if var.causality != "input":
                 raise KeyError(f"{self.path.name}: {name!r} is not an input of this FMU")
             todo.append((name, kind, var.valueReference, _convert(name, kind, value), value))
-        from fmpy.fmi1 import FMICallException
+        from fmpy.fmi1 import FMICallException  # deferred: fmpy is heavy to import
 
         for name, kind, vr, converted, value in todo:
             if kind == "Real":
@@ -724,7 +720,7 @@ class GeneratorFMU:
                 self.fmu.freeInstance()
         finally:
             try:
-                from fmpy import freeLibrary
+                from fmpy import freeLibrary  # deferred: fmpy is heavy to import
 
                 freeLibrary(ctypes.c_void_p(self.fmu.dll._handle))
             except Exception:  # noqa: BLE001
@@ -841,7 +837,7 @@ class Trajectory:
 
     def plot(self, *, al: bool = True, title: str | None = None):
         """Plot x, v, a and j against time (the AL profile dashed); return the figure."""
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         fig, axes = plt.subplots(4, 1, sharex=True, figsize=(8, 8))
         rows = [("x", "x [m]", "x_AL"), ("v", "v [m/s]", "v_AL"), ("a", "a [m/s²]", "a_AL"),

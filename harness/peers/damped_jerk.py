@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from .context import PeerContext, PeerSpec
+from .shapers import al_profile
 from .trajectory import Motion, PiecewiseJerk, SampledTrajectory
 
 
@@ -269,8 +270,6 @@ def damped_jerk_profile(params: Mapping[str, Any], f: float, zeta: float, *, k: 
     fmu, fmi_version
         Passed to :func:`harness.fmu.runner.generate`.
     """
-    from .shapers import al_profile
-
     al = al_profile(params, fmu=fmu, fmi_version=fmi_version)
     m = DampedJerkMotion.from_al(al, DampedJerkFilter(f, zeta, k))
     return m.sample(al.Te, t0=float(al.t[0]))
@@ -293,7 +292,7 @@ class DampingSweep:
 
     def plot(self, title: str | None = None):
         """Residual (% of AL) against ζ; return the Figure."""
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         fig, ax = plt.subplots(figsize=(7, 4))
         for name, r in self.residual.items():

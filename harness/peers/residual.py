@@ -174,7 +174,7 @@ class RobustnessCurve:
 
     def plot(self, title: str | None = None):
         """Residual (in % of the reference, or in µm) against the frequency error."""
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         fig, ax = plt.subplots(figsize=(7, 4))
         data = self.percent() if self.reference else {

@@ -235,7 +235,7 @@ class AmplitudeMap:
 
     def plot(self, title: str | None = None):
         """Three maps (µm of deflection), as Fig. 8 (a)-(c); return the Figure."""
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         fig, axes = plt.subplots(1, 3, figsize=(13, 4), sharey=True)
         vmax = max(np.nanmax(self.deflection(c)) for c in CONDITIONS) * 1e6
@@ -313,7 +313,7 @@ class Fig10Result:
 
     def plot(self, title: str | None = None):
         """Acceleration profiles and the residual deflection of both (Fig. 9-10)."""
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
 
         fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 6))

@@ -47,6 +47,7 @@ from typing import Any
 
 import numpy as np
 
+from ..fmu.runner import generate
 from .context import PeerContext, PeerSpec
 from .trajectory import PiecewiseJerk, SampledTrajectory, from_fmu
 
@@ -104,7 +105,7 @@ class Shaper:
 
     def plot(self, title: str | None = None):
         """Impulses and the sensitivity curve V(f) around the tuned mode; return the Figure."""
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 3.5))
         ax1.stem(1e3 * self.t, self.A)
@@ -165,7 +166,7 @@ def ei(f: float, zeta: float = 0.0, V_tol: float = 0.05) -> Shaper:
     t0 = np.array([0.0, Td / 2, Td])
     if zeta == 0.0:
         return Shaper("EI", A0, t0, f, zeta)
-    from scipy.optimize import fsolve
+    from scipy.optimize import fsolve  # deferred: scipy is heavy to import
 
     omega = 2 * np.pi * f
     sq = np.sqrt(1 - zeta ** 2)
@@ -248,8 +249,6 @@ def al_profile(params: Mapping[str, Any], *, fmu: Any = None, fmi_version: int =
     fmu, fmi_version
         Passed to :func:`harness.fmu.runner.generate`.
     """
-    from ..fmu.runner import generate
-
     p = dict(params)
     p["profile"] = 1
     return from_fmu(generate(p, fmu=fmu, fmi_version=fmi_version), name="AL")

@@ -35,6 +35,10 @@ from typing import Any
 
 import numpy as np
 
+from tqdm import tqdm
+
+from ..fmu.build import default_fmu
+from ..fmu.runner import GeneratorFMU
 from .park import select_case
 from .ruckig_ref import time_optimal
 
@@ -106,9 +110,6 @@ class MoveComparison:
 
 def fmu_motion_time(params: dict[str, Any], fmu: Any = None) -> float:
     """Motion time the generator FMU plans for ``params`` (s), without stepping it."""
-    from ..fmu.build import default_fmu
-    from ..fmu.runner import GeneratorFMU
-
     path = fmu or default_fmu(2)
     with GeneratorFMU(path, params=params) as g:
         g.initialize()
@@ -223,7 +224,7 @@ class TimeOptTable:
 
     def plot(self, title: str | None = None):
         """Excess (% of the time-optimal duration) against the distance, per method and case."""
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         methods = list(dict.fromkeys(r.method for r in self.rows))
         fig, axes = plt.subplots(1, len(methods), figsize=(5 * len(methods), 4), squeeze=False)
@@ -263,8 +264,6 @@ def measure(n_per_case: int = 50, *, seed: int = 0, Te: float = 1e-3,
     progress : bool, optional
         Show a tqdm bar (default: when stderr is a terminal).
     """
-    from tqdm import tqdm
-
     rng = np.random.default_rng(seed)
     methods = tuple(methods)
     moves = []

@@ -456,7 +456,7 @@ class SampledTrajectory:
 
     def plot(self, *, title: str | None = None, others: Sequence[SampledTrajectory] = ()):
         """Plot x, v, a, j (and those of ``others``) against time; return the Figure."""
-        import matplotlib.pyplot as plt
+        import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         fig, axes = plt.subplots(4, 1, sharex=True, figsize=(8, 8))
         rows = [("x", "x [m]"), ("v", "v [m/s]"), ("a", "a [m/s²]"), ("j", "j [m/s³]")]

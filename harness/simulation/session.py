@@ -28,7 +28,7 @@ import numpy as np
 
 from ..fmu import spec
 from ..scenario import Scenario
-from ..tuning.methods import split_profile
+from ..tuning_options import split_profile
 from ..uncertainty import check_map_errors
 from .axis import Axis, MoveSamples
 from .fast_axis import FastAxis

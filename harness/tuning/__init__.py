@@ -3,8 +3,6 @@
 =======================  ================================================================
 module                   what it holds
 =======================  ================================================================
-:mod:`.methods`          the methods' names, :class:`~.methods.TuningOptions`, the one
-                         ``--tuning`` grammar (no simulation: any layer may read it)
 :mod:`.rule`             the paper's rule: JL to the end of the motion, DJL stage by stage
 :mod:`.search`           ``optimal`` and ``robust``: pattern search on the time-varying model
 :mod:`.tune`             :func:`~.tune.tune_profile`: a scenario's profile, by its method
@@ -12,6 +10,8 @@ module                   what it holds
 :mod:`.remainder`        why the paper's rule leaves a remainder (closed forms)
 =======================  ================================================================
 
-The package imports none of its modules: import the one you need
-(``from harness.tuning.tune import tune_profile``).
+The methods' names, :class:`~harness.tuning_options.TuningOptions` and the one
+``--tuning`` grammar sit below, in :mod:`harness.tuning_options` (no
+simulation: the scenario files read them).  The package imports none of its
+modules: import the one you need (``from harness.tuning.tune import tune_profile``).
 """

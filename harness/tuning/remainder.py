@@ -273,7 +273,7 @@ def optimal_jerk_time(f: float, zeta: float, cycles: int = 1) -> tuple[float, fl
     r_min : float
         :func:`stage_remainder` there.
     """
-    from scipy.optimize import minimize_scalar
+    from scipy.optimize import minimize_scalar  # deferred: scipy is heavy to import
 
     if cycles < 1:
         raise ValueError("cycles must be >= 1")
@@ -745,8 +745,8 @@ def plot_jerk_times(results: Mapping[str, Sequence[TuningResult]], *, ax: Any = 
     -------
     matplotlib.figure.Figure
     """
-    import matplotlib.pyplot as plt
-    from matplotlib.lines import Line2D
+    import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
+    from matplotlib.lines import Line2D  # deferred: matplotlib is heavy to import
 
     if ax is None:
         fig, ax = plt.subplots(figsize=(8.0, 5.6))

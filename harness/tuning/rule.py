@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..simulation.axis import MoveSamples, stage_starts
-from .methods import RULES
+from ..tuning_options import RULES
 
 __all__ = ["PlanFunction", "TuningResult", "sinc_residual", "tune_djl", "tune_jl"]
 

@@ -44,7 +44,7 @@ import numpy as np
 from ..plant import hermite_mid
 from ..scenario import Scenario
 from ..simulation.session import Session
-from .methods import TuningOptions
+from ..tuning_options import TuningOptions
 from .rule import TuningResult
 
 __all__ = [

@@ -3,7 +3,7 @@
 ``djl-fmu tune`` (:mod:`harness.commands.tune`) and :func:`tune_table` tune the
 jerk times of JL and DJL for one move, every case of a ``[sweep]`` or every
 point of a ``[map]`` grid (Z start, Z travel, distance, v_max), with the
-methods of :mod:`harness.tuning.methods` (DJL ``paper`` | ``optimal`` | ``robust``,
+methods of :mod:`harness.tuning_options` (DJL ``paper`` | ``optimal`` | ``robust``,
 JL ``end`` | ``optimal``), measure the residual vibration each leaves (nominal
 and worst case over the stated map uncertainty) and export one row per move
 in a CSV file whose ``#`` header says what every column means and how a
@@ -61,8 +61,8 @@ from ..fmu import spec
 from ..scenario import Scenario, load_scenario
 from ..simulation.session import Session
 from ..uncertainty import check_map_error
-from .methods import DJL_METHODS, JL_METHODS
-from .methods import parse_tuning as parse_pairs
+from ..tuning_options import DJL_METHODS, JL_METHODS
+from ..tuning_options import parse_tuning as parse_pairs
 from .search import Objective
 from .tune import tune_profile
 
@@ -223,7 +223,7 @@ _META_LINE = re.compile(r"^# ([A-Za-z_][A-Za-z0-9_]*): (.*)$")
 def parse_tuning(text: str | None) -> tuple[str, str]:
     """Return the DJL and JL methods a ``--tuning`` value picks for a table.
 
-    The grammar is the one of every command (:func:`harness.tuning.methods.parse_tuning`):
+    The grammar is the one of every command (:func:`harness.tuning_options.parse_tuning`):
     comma-separated items ``METHOD``, ``djl=METHOD`` or ``jl=METHOD``.  A table
     has one DJL and one JL column set, so it takes at most one method per
     profile.
@@ -327,7 +327,7 @@ def tune_move(case: Scenario, session: Session, index: int = 0) -> dict[str, Any
     function the optimal and robust searches minimise: the free-oscillation
     amplitude when the reference ends, Z moving as in the scenario; the worst
     case is the largest over the frequency factors 1 + e of
-    :meth:`harness.tuning.methods.TuningOptions.factors` and the damping factors.
+    :meth:`harness.tuning_options.TuningOptions.factors` and the damping factors.
     """
     Te = case.simulation.Te
     jl = tune_profile(session, case, "JL")

@@ -14,7 +14,7 @@ import dataclasses
 
 from ..scenario import Scenario
 from ..simulation.session import Session
-from .methods import split_profile
+from ..tuning_options import split_profile
 from .rule import TuningResult, tune_djl, tune_jl
 from .search import tune_optimal
 

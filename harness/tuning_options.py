@@ -1,4 +1,4 @@
-"""The tuning methods' names and options: the one low module every layer may read.
+"""The tuning methods' names and options: the low module every layer may read.
 
 * :data:`DJL_METHODS`, :data:`JL_METHODS` -- how the jerk times are found;
 * :data:`RULES` -- the two forms of the paper's DJL rule;
@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..uncertainty import check_map_error
+from .uncertainty import check_map_error
 
 __all__ = [
     "DJL_METHODS",
