@@ -32,7 +32,6 @@ import numpy as np
 
 from .plant import Mode, free_amplitude
 
-
 __all__ = [
     "DEFAULT_SETTLE_BAND",
     "SettleBand",

@@ -34,7 +34,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-
 from tqdm import tqdm
 
 from ..fmu.build import default_fmu

@@ -60,9 +60,9 @@ from ..files import write_text
 from ..fmu import spec
 from ..scenario import Scenario, load_scenario
 from ..simulation.session import Session
-from ..uncertainty import check_map_error
 from ..tuning_options import DJL_METHODS, JL_METHODS
 from ..tuning_options import parse_tuning as parse_pairs
+from ..uncertainty import check_map_error
 from .search import Objective
 from .tune import tune_profile
 
