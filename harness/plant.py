@@ -413,7 +413,7 @@ def simulate_mode(
         v_z = np.asarray(v_z, dtype=float)
         if z.shape != t.shape or v_z.shape != t.shape:
             raise ValueError("z and v_z must have the shape of t")
-        zm = 0.5 * (z[:-1] + z[1:]) + 0.125 * h * (v_z[:-1] - v_z[1:])
+        zm = hermite_mid(z[:-1], v_z[:-1], z[1:], v_z[1:], h)
         fk = np.array([f(float(zz)) for zz in zm], dtype=float)
     elif callable(f):
         fk = np.array([f(tk + 0.5 * h) for tk in t[:-1]], dtype=float)

@@ -100,7 +100,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 from .errors import HarnessError
-from .fmu.runner import check_fmu_binary, check_fmu_variables
+from .fmu.runner import check_fmu_binary, check_fmu_variables, samples_per_step
 from .metrics import DEFAULT_SETTLE_BAND, SettleBand, parse_settle_band
 from .modemap import CantileverLaw, ConstantLaw, LinearLaw, ModeMap, ModeSpec, TableLaw
 from .tuning_options import DJL_METHODS, JL_METHODS, RULES, VARIANTS, TuningOptions
@@ -646,9 +646,10 @@ def parse_scenario(data: Mapping[str, Any], source: str = "<string>",
     for k_, v_ in (("Te", Te), ("step", step)):
         if v_ > MAX_STEP:
             raise s.err(k_, v_, f"must be <= {MAX_STEP:g} s (MAX_STEP)")
-    ratio = step / Te
-    if abs(ratio - round(ratio)) > 1e-9 * max(1.0, ratio) or round(ratio) < 1:
-        raise s.err("step", step, f"must be a whole multiple of Te = {Te:g} s")
+    try:
+        samples_per_step(step, Te, "generator")
+    except ValueError:
+        raise s.err("step", step, f"must be a whole multiple of Te = {Te:g} s") from None
     t_after = s.number("t_after", 3.0, nonneg=True, what="s after the motion")
     fmi_version = s.integer("fmi_version", 2, choices=(2, 3))
     fmu_raw = s.string("fmu", "")

@@ -774,6 +774,37 @@ def _convert(name: str, kind: str, x: Any) -> Any:
     raise TypeError(f"{name}: a Real variable takes a number, got {x!r}")
 
 
+def samples_per_step(h: float, Te: float, what: str = "axis") -> int:
+    """Return the generator samples in a step ``h``, which must be a whole multiple of ``Te``.
+
+    Parameters
+    ----------
+    h : float
+        Communication step (s).
+    Te : float
+        Sampling period of the generator (s).
+    what : str
+        Names the generator in the message (e.g. ``"Z axis"``).
+
+    Returns
+    -------
+    int
+        ``round(h / Te)``, at least 1.
+
+    Raises
+    ------
+    ValueError
+        If ``h`` is not a whole multiple of ``Te`` (to 1e-9 relative), or is
+        shorter than ``Te``.
+    """
+    r = h / Te
+    m = round(r) if math.isfinite(r) else 0
+    if not math.isfinite(r) or abs(r - m) > 1e-9 * max(1.0, r) or m < 1:
+        raise ValueError(f"communication step {h:g} s is not a whole multiple of the "
+                         f"{what}'s Te = {Te:g} s")
+    return int(m)
+
+
 def motion_start(t_start: float, start_time: float, Te: float) -> float:
     """First generator sample (``start_time + k Te``) at or after ``t_start``.
 
@@ -852,8 +883,7 @@ class Trajectory:
             ax.grid(True, alpha=0.3)
         axes[0].legend(loc="lower right", fontsize="small")
         axes[-1].set_xlabel("t [s]")
-        names = {1: "AL", 2: "JL", 3: "DJL"}
-        prof = names.get(int(self.params.get("profile", 3)), "?")
+        prof = spec.PROFILE_NAMES.get(int(self.params.get("profile", 3)), "?")
         fig.suptitle(title or f"{prof} profile, motion time {self.motion_time:.4g} s")
         fig.tight_layout()
         return fig

@@ -35,6 +35,8 @@ from typing import Any
 
 import numpy as np
 
+from ..fmu import spec
+
 FloatArray = np.ndarray
 
 
@@ -489,7 +491,7 @@ def from_fmu(traj: Any, name: str | None = None) -> SampledTrajectory:
         Label; default ``"AL"``, ``"JL"`` or ``"DJL"`` from the profile parameter.
     """
     profile = int(traj.params.get("profile", 3))
-    name = name or {1: "AL", 2: "JL", 3: "DJL"}.get(profile, "FMU")
+    name = name or spec.PROFILE_NAMES.get(profile, "FMU")
     Te = float(traj.params.get("Te", traj.t[1] - traj.t[0]))
     if not np.allclose(np.diff(traj.t), Te, rtol=1e-9, atol=0.0):
         raise ValueError("the FMU trajectory must be sampled at its Te (dt = Te)")

@@ -13,9 +13,10 @@ A third, :class:`harness.simulation.master.MotionAxis`, wraps a precomputed
 motion (the peers' references) for the same master.
 
 The module also holds what every axis shares: :class:`MoveSamples` (a move at
-every generator sample), :func:`stage_starts` (where the four constant-jerk
-stages start) and :func:`samples_per_step` (the one check that a communication
-step is a whole number of generator samples).
+every generator sample) and :func:`stage_starts` (where the four constant-jerk
+stages start); :func:`samples_per_step` (the one check that a communication
+step is a whole number of generator samples) is
+:func:`harness.fmu.runner.samples_per_step`.
 """
 
 from __future__ import annotations
@@ -27,6 +28,8 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from ..fmu.runner import samples_per_step
+
 __all__ = [
     "Axis",
     "MoveSamples",
@@ -35,37 +38,6 @@ __all__ = [
     "samples_per_step",
     "stage_starts",
 ]
-
-
-def samples_per_step(h: float, Te: float, what: str = "axis") -> int:
-    """Return the generator samples in a step ``h``, which must be a whole multiple of ``Te``.
-
-    Parameters
-    ----------
-    h : float
-        Communication step (s).
-    Te : float
-        Sampling period of the generator (s).
-    what : str
-        Names the generator in the message (e.g. ``"Z axis"``).
-
-    Returns
-    -------
-    int
-        ``round(h / Te)``, at least 1.
-
-    Raises
-    ------
-    ValueError
-        If ``h`` is not a whole multiple of ``Te`` (to 1e-9 relative), or is
-        shorter than ``Te``.
-    """
-    r = h / Te
-    m = round(r) if math.isfinite(r) else 0
-    if not math.isfinite(r) or abs(r - m) > 1e-9 * max(1.0, r) or m < 1:
-        raise ValueError(f"communication step {h:g} s is not a whole multiple of the "
-                         f"{what}'s Te = {Te:g} s")
-    return int(m)
 
 
 @dataclass

@@ -41,20 +41,27 @@ ENGINES = ("fmu", "fast")
 """Evaluation engines: the generator FMUs through fmpy, or the compiled engine."""
 
 
+AXES: dict[str, Callable[[str | Path | None, int, str], Axis]] = {
+    "fmu": lambda fmu, fmi_version, name: FMUAxis(fmu, fmi_version=fmi_version, name=name),
+    "fast": lambda fmu, fmi_version, name: FastAxis(name=name),
+}
+"""How each engine makes an axis (the FMU file and FMI version matter to ``fmu`` only)."""
+
+
 def make_axis(engine: str, fmu: str | Path | None = None, fmi_version: int = 2,
               name: str = "axis") -> Axis:
-    """One generator axis on ``engine`` (:data:`ENGINES`).
+    """Return one generator axis on ``engine`` (:data:`ENGINES`).
 
     Raises
     ------
     ValueError
-        An unknown engine, or an FMI version other than the integers 2 and 3.
+        An unknown engine.
     """
-    if engine == "fast":
-        return FastAxis(name=name)
-    if engine == "fmu":
-        return FMUAxis(fmu, fmi_version=fmi_version, name=name)
-    raise ValueError(f"unknown engine {engine!r}: choose from {', '.join(ENGINES)}")
+    try:
+        make = AXES[engine]
+    except KeyError:
+        raise ValueError(f"unknown engine {engine!r}: choose from {', '.join(ENGINES)}") from None
+    return make(fmu, fmi_version, name)
 
 
 class Session:
