@@ -1,28 +1,42 @@
-"""What the real machine may differ by: the map errors the harness scores and tunes against.
+"""What the real machine may differ by: the uncertainty the harness tunes and scores against.
 
 A *map error* e scales the whole mode map: every frequency f(z) becomes
-f(z)·(1 + e), the jerk times staying those tuned on the nominal map.  This
-module holds the ranges used everywhere and the one check of a map error:
+f(z)·(1 + e), the jerk times staying those tuned on the nominal map.  More
+generally a :class:`Perturbation` also scales the map's slope, shifts it along
+z and scales the damping; a scenario's ``[uncertainty]`` table
+(:class:`UncertaintySpec`) gives the ranges, from which two deterministic sets
+are drawn: the *tuning* set the robust methods minimise over, and the finer
+*scoring* set every table reports (never the points a method was tuned on).
 
-* :data:`DEFAULT_ERRORS` -- the robustness curves, −20 % … +20 %, 1 % apart;
-* :data:`WORST_SPAN`, :data:`WORST_ERRORS` -- the worst case, over ±10 %;
+* :data:`DEFAULT_ERRORS` -- the map-error curves, −20 % … +20 %, 1 % apart;
+* :data:`WORST_SPAN`, :data:`WORST_ERRORS` -- their worst case, over ±10 %;
 * :func:`check_map_error` -- a bound ``map_error`` in [0, 1) (tuning, tables);
-* :func:`check_map_errors` -- errors e, finite and > −1 (a frequency > 0).
+* :func:`check_map_errors` -- errors e, finite and > −1 (a frequency > 0);
+* :class:`UncertaintySpec`, :func:`parse_uncertainty` -- the ranges, and the
+  ``--uncertainty`` grammar (``map_scale=0.1,map_slope=0.3,z_shift=0.05,damping=0.5:2``).
 """
 
 from __future__ import annotations
 
+import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 __all__ = [
     "DEFAULT_ERRORS",
+    "DEFAULT_UNCERTAINTY",
     "WORST_ERRORS",
     "WORST_SPAN",
+    "Perturbation",
+    "UncertaintySet",
+    "UncertaintySpec",
     "check_map_error",
     "check_map_errors",
+    "parse_uncertainty",
 ]
 
 DEFAULT_ERRORS = np.linspace(-0.2, 0.2, 41)
@@ -71,3 +85,266 @@ def check_map_errors(errors: Sequence[float] | np.ndarray | float) -> np.ndarray
     if not np.all(np.isfinite(e)) or np.any(e <= -1.0):
         raise ValueError(f"map errors must be finite and > -1, got {e!r}")
     return e
+
+
+# ------------------------------------------------------------ uncertainty sets
+
+
+@dataclass(frozen=True)
+class Perturbation:
+    """One way the real machine may differ from the mode map: one point of an uncertainty set.
+
+    The perturbed frequency of a mode at z is, in this order,
+
+    1. shifted along z: g(z) = f(z − ``shift``);
+    2. its slope scaled about the pivot z_p (the middle of the Z travel):
+       g(z_p) + (1 + ``slope``)·(g(z) − g(z_p));
+    3. the whole map scaled: × (1 + ``scale``) (a map error e);
+
+    and every damping ratio is multiplied by ``damping``.
+
+    Attributes
+    ----------
+    scale : float
+        Relative error of the whole map (> −1).
+    slope : float
+        Relative error of the map's slope df/dz (> −1).
+    shift : float
+        Shift of the map along z (m).
+    damping : float
+        Factor of every damping ratio (> 0; the result is capped at 0.999).
+    """
+
+    scale: float = 0.0
+    slope: float = 0.0
+    shift: float = 0.0
+    damping: float = 1.0
+
+    def __post_init__(self) -> None:
+        for name in ("scale", "slope", "shift", "damping"):
+            if not math.isfinite(getattr(self, name)):
+                raise ValueError(f"perturbation {name} must be finite, got {getattr(self, name)!r}")
+        if self.scale <= -1.0 or self.slope <= -1.0:
+            raise ValueError(f"scale and slope must be > -1, got {self.scale!r}, {self.slope!r}")
+        if not self.damping > 0.0:
+            raise ValueError(f"damping factor must be > 0, got {self.damping!r}")
+
+    @property
+    def is_scale_only(self) -> bool:
+        """Only the whole map is scaled (the map error of the robustness curves)."""
+        return self.slope == 0.0 and self.shift == 0.0 and self.damping == 1.0
+
+    def frequencies(self, f_of_z: Callable[[np.ndarray], np.ndarray], z: np.ndarray,
+                    pivot: float) -> np.ndarray:
+        """Return the perturbed frequencies (Hz) at ``z`` of a vectorised law ``f_of_z``.
+
+        With only ``scale`` set, ``f_of_z(z) * (1 + scale)``: the very arithmetic of the
+        map-error runs (:func:`harness.simulation.master.map_error_residuals`).
+        """
+        z = np.asarray(z, dtype=float)
+        g = f_of_z(z - self.shift) if self.shift else f_of_z(z)
+        if self.slope:
+            gp = float(np.asarray(f_of_z(np.array([pivot - self.shift])))[0])
+            g = gp + (1.0 + self.slope) * (g - gp)
+        return g * (1.0 + self.scale)
+
+    def zeta(self, zeta: float) -> float:
+        """Return the perturbed damping ratio."""
+        return zeta if self.damping == 1.0 else min(zeta * self.damping, 0.999)
+
+    def label(self) -> str:
+        """Short description, e.g. ``scale +10 %, damping x0.5``."""
+        parts = []
+        if self.scale:
+            parts.append(f"scale {100 * self.scale:+.3g} %")
+        if self.slope:
+            parts.append(f"slope {100 * self.slope:+.3g} %")
+        if self.shift:
+            parts.append(f"shift {1e3 * self.shift:+.3g} mm")
+        if self.damping != 1.0:
+            parts.append(f"damping x{self.damping:.3g}")
+        return ", ".join(parts) or "nominal"
+
+
+@dataclass(frozen=True)
+class UncertaintySet:
+    """A deterministic set of perturbations, nominal first.
+
+    Attributes
+    ----------
+    points : tuple of Perturbation
+        The points; ``points[0]`` is the nominal map.
+    label : str
+        What the set covers, in words.
+    """
+
+    points: tuple[Perturbation, ...]
+    label: str
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+
+def _grid(half: float, n: int) -> list[float]:
+    """``n`` points from −half to +half (0 included when n is odd)."""
+    return [0.0] if half == 0.0 else [float(x) for x in np.linspace(-half, half, n)]
+
+
+@dataclass(frozen=True)
+class UncertaintySpec:
+    """``[uncertainty]`` of a scenario: how far the real mode map may be from the model.
+
+    Every range is symmetric about the nominal map, and off (0, or (1, 1) for the
+    damping) unless given.
+
+    Attributes
+    ----------
+    map_scale : float
+        The whole map f(z) off by up to ±``map_scale`` (relative; default 0.1).
+    map_slope : float
+        Its slope df/dz off by up to ±``map_slope`` (relative), about the middle
+        of the Z travel.
+    z_shift : float
+        The map shifted along z by up to ±``z_shift`` (m).
+    damping : tuple of float
+        Every damping ratio multiplied by a factor in [lo, hi].
+
+    Notes
+    -----
+    Two sets are drawn from the ranges, deterministically: the *tuning* set
+    (:meth:`tuning_set`, what the robust methods minimise over) and the finer
+    *scoring* set (:meth:`scoring_set`, what every table reports), so that no
+    method is scored on the points it was tuned on.
+    """
+
+    map_scale: float = 0.1
+    map_slope: float = 0.0
+    z_shift: float = 0.0
+    damping: tuple[float, float] = (1.0, 1.0)
+
+    TUNING_POINTS = {"map_scale": 9, "map_slope": 5, "z_shift": 5, "damping": 3}
+    """Points of each range in the tuning set (plus the corners of the box)."""
+
+    SCORING_POINTS = {"map_scale": 41, "map_slope": 21, "z_shift": 21, "damping": 9}
+    """Points of each range in the scoring set (plus the 3^d grid of the box, corners included)."""
+
+    def __post_init__(self) -> None:
+        check_map_error(self.map_scale, "uncertainty map_scale")
+        check_map_error(self.map_slope, "uncertainty map_slope")
+        if not (math.isfinite(self.z_shift) and 0.0 <= self.z_shift <= 1.0):
+            raise ValueError(f"uncertainty z_shift must be in [0, 1] m, got {self.z_shift!r}")
+        lo, hi = self.damping
+        if not (math.isfinite(lo) and math.isfinite(hi) and 0.0 < lo <= 1.0 <= hi <= 100.0):
+            raise ValueError(f"uncertainty damping must be [lo, hi] with 0 < lo <= 1 <= hi <= "
+                             f"100, got {list(self.damping)!r}")
+
+    @property
+    def active(self) -> dict[str, bool]:
+        """Which ranges are on."""
+        return {"map_scale": self.map_scale > 0, "map_slope": self.map_slope > 0,
+                "z_shift": self.z_shift > 0, "damping": self.damping != (1.0, 1.0)}
+
+    def _axes(self, counts: Mapping[str, int]) -> dict[str, list[float]]:
+        lo, hi = self.damping
+        damp = sorted({1.0, *[float(x) for x in np.geomspace(lo, hi, counts["damping"])]}) \
+            if self.active["damping"] else [1.0]
+        return {"map_scale": _grid(self.map_scale, counts["map_scale"]),
+                "map_slope": _grid(self.map_slope, counts["map_slope"]),
+                "z_shift": _grid(self.z_shift, counts["z_shift"]),
+                "damping": damp}
+
+    def _set(self, counts: Mapping[str, int], box: int, what: str) -> UncertaintySet:
+        axes = self._axes(counts)
+        on = [k for k, v in self.active.items() if v]
+        pts: list[Perturbation] = [Perturbation()]
+
+        def add(values: Mapping[str, float]) -> None:
+            p = Perturbation(values.get("map_scale", 0.0), values.get("map_slope", 0.0),
+                             values.get("z_shift", 0.0), values.get("damping", 1.0))
+            if p not in pts:
+                pts.append(p)
+
+        for k in on:  # each range alone, the others nominal
+            for x in axes[k]:
+                add({k: x})
+        if len(on) > 1:  # the box: its corners (box = 2) or its 3^d grid (box = 3)
+            ends = {k: ([min(axes[k]), max(axes[k])] if box == 2 else
+                        [min(axes[k]), 1.0 if k == "damping" else 0.0, max(axes[k])])
+                    for k in on}
+            for combo in itertools.product(*(ends[k] for k in on)):
+                add(dict(zip(on, combo, strict=True)))
+        return UncertaintySet(tuple(pts), f"{self.describe()}; {what}, {len(pts)} points")
+
+    def tuning_set(self) -> UncertaintySet:
+        """Return the points the robust methods are tuned on (coarse grids, the corners)."""
+        return self._set(self.TUNING_POINTS, 2, "tuning set")
+
+    def scoring_set(self) -> UncertaintySet:
+        """Return the points every method is scored on: finer grids, the box's 3^d grid."""
+        return self._set(self.SCORING_POINTS, 3, "scoring set")
+
+    def describe(self) -> str:
+        """Return the ranges in words, e.g. ``map scale +/-10 %, damping x0.5..2``."""
+        parts = []
+        if self.map_scale:
+            parts.append(f"map scale +/-{100 * self.map_scale:g} %")
+        if self.map_slope:
+            parts.append(f"map slope +/-{100 * self.map_slope:g} %")
+        if self.z_shift:
+            parts.append(f"map shifted +/-{1e3 * self.z_shift:g} mm in z")
+        if self.active["damping"]:
+            parts.append(f"damping x{self.damping[0]:g}..{self.damping[1]:g}")
+        return ", ".join(parts) or "none (nominal map only)"
+
+    def __str__(self) -> str:
+        """Return the spec in the ``--uncertainty`` grammar (:func:`parse_uncertainty`)."""
+        parts = [f"map_scale={self.map_scale:g}"]
+        if self.map_slope:
+            parts.append(f"map_slope={self.map_slope:g}")
+        if self.z_shift:
+            parts.append(f"z_shift={self.z_shift:g}")
+        if self.active["damping"]:
+            parts.append(f"damping={self.damping[0]:g}:{self.damping[1]:g}")
+        return ",".join(parts)
+
+
+DEFAULT_UNCERTAINTY = UncertaintySpec()
+"""The default: the whole map off by up to ±10 %, nothing else."""
+
+
+def parse_uncertainty(text: str | None, base: UncertaintySpec = DEFAULT_UNCERTAINTY
+                      ) -> UncertaintySpec:
+    """Read an ``--uncertainty`` value: ``KEY=VALUE`` items, comma-separated.
+
+    Keys: ``map_scale`` (±, relative), ``map_slope`` (±, relative), ``z_shift``
+    (±, m), ``damping`` (``LO:HI`` factors); ``none`` turns every range off.
+    Keys not given keep ``base``'s value.
+
+    Raises
+    ------
+    ValueError
+        An unknown key, a malformed or out-of-range value (naming it).
+    """
+    values: dict[str, Any] = {"map_scale": base.map_scale, "map_slope": base.map_slope,
+                              "z_shift": base.z_shift, "damping": base.damping}
+    for raw in (text or "").split(","):
+        item = raw.strip()
+        if not item:
+            continue
+        if item.lower() == "none":
+            values.update(map_scale=0.0, map_slope=0.0, z_shift=0.0, damping=(1.0, 1.0))
+            continue
+        key, sep, value = (s.strip() for s in item.partition("="))
+        if not sep or key not in values:
+            raise ValueError(f"{item!r}: write KEY=VALUE with KEY one of {', '.join(values)} "
+                             f"(or 'none')")
+        try:
+            if key == "damping":
+                lo, sep2, hi = value.partition(":")
+                values[key] = (float(lo), float(hi) if sep2 else float(lo))
+            else:
+                values[key] = float(value)
+        except ValueError:
+            raise ValueError(f"{item!r}: {value!r} is not a number"
+                             + (" (damping takes LO:HI)" if key == "damping" else "")) from None
+    return UncertaintySpec(**values)
