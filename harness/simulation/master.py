@@ -42,6 +42,7 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -52,6 +53,7 @@ import numpy as np
 
 from .. import _engine
 from ..plant import Mode, ScheduledMode, free_amplitude, free_response, hermite_mid
+from ..uncertainty import Perturbation
 from .axis import Axis, PlantInput, samples_per_step
 from .plots import plot_runs
 
@@ -60,6 +62,7 @@ __all__ = [
     "RunUntilDone",
     "cosimulate",
     "map_error_residuals",
+    "perturbed",
     "plan_info",
     "step_plant",
 ]
@@ -124,6 +127,8 @@ class CoSimResult:
         What the recorders kept: the extra outputs of the excited axis asked
         for (``record``) at each point, and the inputs set before each step
         (NaN at the last point).
+    plant_input : PlantInput, optional
+        What the plant was fed over each step (re-used by :func:`perturbed`).
     """
 
     profile: str
@@ -156,6 +161,7 @@ class CoSimResult:
     plan_info: dict[str, Any] = field(default_factory=dict)
     engine: str = "fmu"
     signals: dict[str, np.ndarray] = field(default_factory=dict)
+    plant_input: PlantInput | None = field(default=None, repr=False)
 
     @property
     def motion_time(self) -> float:
@@ -421,7 +427,8 @@ def cosimulate(
     sm = scheduled(modes)
     zm = hermite_mid(z[:-1], v_z[:-1], z[1:], v_z[1:], h)
     f_mid = np.vstack([m.f_array(zm) for m in sm]) if n else np.zeros((len(sm), 0))
-    eps, states = step_plant(axis.plant_input(X, h), h, f_mid, sm, n)
+    inp = axis.plant_input(X, h)
+    eps, states = step_plant(inp, h, f_mid, sm, n)
     k_end = min(n, math.ceil(t_end / h - 1e-9))
     nm = len(sm)
     z_end, z_last = float(z[k_end]), float(z[-1])
@@ -444,6 +451,7 @@ def cosimulate(
         wall_time=time.perf_counter() - t0, final_state=[float(s) for s in states[-1]],
         final_modes=[m.at(z_last) for m in sm], plan_info=info,
         engine=axis.engine if axis.engine != "reference" else z_axis.engine, signals=signals,
+        plant_input=inp,
     )
 
 
@@ -494,4 +502,62 @@ def map_error_residuals(axis: Axis, z_axis: Axis, modes: Sequence[ScheduledMode 
         out[i] = sum(free_amplitude(float(states[-1, 2 * q]), float(states[-1, 2 * q + 1]),
                                     Mode(f_end[q] * c, m.zeta, m.gain))
                      for q, m in enumerate(sm))
+    return out
+
+
+def perturbed(run: CoSimResult, modes: Sequence[ScheduledMode | Mode],
+              points: Sequence[Perturbation], pivot: float) -> list[CoSimResult]:
+    """Return the run on perturbed plants: the reference and the Z move kept, the plant re-run.
+
+    The reference was planned on the nominal map and does not change with it;
+    for each point the plant is stepped again over the whole record
+    (:func:`step_plant`, in C) with the perturbed frequencies and damping
+    (:class:`harness.uncertainty.Perturbation`).  A scale-only point gives the
+    numbers of :func:`map_error_residuals` for the same error.
+
+    Parameters
+    ----------
+    run : CoSimResult
+        A run of :func:`cosimulate` (it keeps its plant input).
+    modes : sequence of ScheduledMode or Mode
+        The nominal modes of that run.
+    points : sequence of Perturbation
+        The perturbations.
+    pivot : float
+        Z position (m) the slope perturbations turn about.
+
+    Returns
+    -------
+    list of CoSimResult
+        One per point: the run with the perturbed plant's deflection, states and
+        frequencies.
+    """
+    if run.plant_input is None:
+        raise ValueError("the run keeps no plant input (made by an older master?)")
+    sm = scheduled(modes)
+    h, n = run.step, run.t.size - 1
+    z, v_z = run.z, run.v_z
+    zm = hermite_mid(z[:-1], v_z[:-1], z[1:], v_z[1:], h)
+    k_end = min(n, math.ceil(run.t_end / h - 1e-9))
+    z_end, z_last = float(z[k_end]), float(z[-1])
+    out = []
+    for p in points:
+        pm = [ScheduledMode(m.f_of_z, p.zeta(m.zeta), m.gain, m.name, m.f_of_z_array)
+              for m in sm]
+        f_mid = (np.vstack([p.frequencies(m.f_array, zm, pivot) for m in sm]) if n
+                 else np.zeros((len(sm), 0)))
+        eps, states = step_plant(run.plant_input, h, f_mid, pm, n)
+
+        def frozen(m: ScheduledMode, zz: float, p: Perturbation = p) -> Mode:
+            f = float(p.frequencies(m.f_array, np.array([zz]), pivot)[0])
+            return Mode(f, p.zeta(m.zeta), m.gain)
+
+        out.append(dataclasses.replace(
+            run, eps=eps, eps_modes=states[:, 0::2].T.copy(),
+            f=np.vstack([p.frequencies(m.f_array, z, pivot) for m in sm]),
+            state_end=[(float(states[k_end, 2 * i]), float(states[k_end, 2 * i + 1]))
+                       for i in range(len(sm))],
+            modes_end=[frozen(m, z_end) for m in sm],
+            final_state=[float(s) for s in states[-1]],
+            final_modes=[frozen(m, z_last) for m in sm]))
     return out
