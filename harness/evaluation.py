@@ -12,8 +12,10 @@ Table 1 quantities.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -22,13 +24,14 @@ from .plant import free_amplitude
 from .results import ProfileOutcome, ScenarioResult
 from .robustness import robustness as robustness_curves
 from .scenario import Scenario
-from .simulation.master import CoSimResult
+from .simulation.master import CoSimResult, perturbed
 from .simulation.session import Session
 from .tuning.rule import TuningResult
 from .tuning.tune import jerk_times, tune_profile
-from .uncertainty import DEFAULT_ERRORS, WORST_ERRORS, WORST_SPAN
+from .uncertainty import DEFAULT_ERRORS, WORST_ERRORS, WORST_SPAN, UncertaintySet
 
-__all__ = ["ROBUSTNESS_MODES", "ProfileMetrics", "profile_metrics", "run_case"]
+__all__ = ["ROBUSTNESS_MODES", "ProfileMetrics", "peaks", "profile_metrics", "run_case",
+           "score_uncertainty"]
 
 ROBUSTNESS_MODES = ("worst", "curves")
 """Values of ``run_case(..., robustness=...)`` besides False / True."""
@@ -63,6 +66,20 @@ class ProfileMetrics:
         definition); NaN when DJL was not run.
     paper_band : float
         That band (m); NaN when DJL was not run.
+    residual_worst : float
+        Largest residual (m) over the scoring set of the scenario's
+        uncertainty (:meth:`harness.uncertainty.UncertaintySpec.scoring_set`),
+        the reference planned on the nominal map; NaN when not scored.
+    settling_time_worst : float
+        Largest settling time (s) into ``band`` over the same set: the time
+        after which the load is within the band whatever the real map; NaN
+        when not scored, ``inf`` if some point never settles.
+    worst_point : str
+        The perturbation of that worst settling time (``"scale -10 %"``).
+    v_peak, a_peak, j_peak : float
+        Largest |v| (m/s), |a| (m/s²) and |j| (m/s³) of the reference at the
+        communication points; ``j_peak`` is ``inf`` for a reference whose
+        acceleration steps (AL: no jerk limit).
     """
 
     residual: float
@@ -74,6 +91,12 @@ class ProfileMetrics:
     residual_peak: float = math.nan
     settling_time_paper: float = math.nan
     paper_band: float = math.nan
+    residual_worst: float = math.nan
+    settling_time_worst: float = math.nan
+    worst_point: str = ""
+    v_peak: float = math.nan
+    a_peak: float = math.nan
+    j_peak: float = math.nan
 
 
 def _settling(run: CoSimResult, band: float) -> float:
@@ -138,7 +161,55 @@ def profile_metrics(run: CoSimResult, band: float, *,
         residual_peak=residual_peak(run.t, run.eps, run.t_end),
         settling_time_paper=ts_paper,
         paper_band=pb,
+        **peaks(run),
     )
+
+
+def peaks(run: CoSimResult) -> dict[str, float]:
+    """Largest |v|, |a|, |j| of a run's reference (``j_peak`` inf where ``a`` steps)."""
+    h = run.step
+    a_scale = max(1.0, float(np.max(np.abs(run.a)))) if run.a.size else 1.0
+    steps = run.a.size > 1 and bool(np.any(
+        np.abs(run.a[1:] - (run.a[:-1] + run.j[:-1] * h)) > 1e-9 * a_scale))
+    return {"v_peak": float(np.max(np.abs(run.v))), "a_peak": float(np.max(np.abs(run.a))),
+            "j_peak": math.inf if steps else float(np.max(np.abs(run.j)))}
+
+
+def score_uncertainty(run: CoSimResult, sc: Scenario, band: float,
+                      points: UncertaintySet | None = None) -> dict[str, Any]:
+    """Worst residual and worst settling time of a run over the scenario's uncertainty.
+
+    The reference stays the one planned on the nominal map; the plant is re-run
+    for every perturbation of the scoring set
+    (:func:`harness.simulation.master.perturbed`) and measured in the same band.
+
+    Parameters
+    ----------
+    run : CoSimResult
+        The nominal run (full record).
+    sc : Scenario
+        Its scenario (``sc.uncertainty``, the mode map).
+    band : float
+        The settling band (m), fixed for every point and every profile.
+    points : UncertaintySet, optional
+        Default: ``sc.uncertainty.scoring_set()``.
+
+    Returns
+    -------
+    dict
+        ``residual_worst``, ``settling_time_worst``, ``worst_point``.
+    """
+    uset = sc.uncertainty.scoring_set() if points is None else points
+    pivot = sc.z.z0 + 0.5 * sc.z.distance
+    worst_r, worst_t, where = 0.0, -math.inf, ""
+    for p, r in zip(uset.points, perturbed(run, sc.modemap.scheduled(), uset.points, pivot,
+                                        full=False),
+                    strict=True):
+        worst_r = max(worst_r, r.free_amplitude)
+        ts = _settling(r, band)
+        if ts > worst_t or (math.isnan(ts) and not where):
+            worst_t, where = ts, p.label()
+    return {"residual_worst": worst_r, "settling_time_worst": worst_t, "worst_point": where}
 
 
 def _robustness_mode(robustness: bool | str | None) -> str | None:
@@ -153,7 +224,8 @@ def _robustness_mode(robustness: bool | str | None) -> str | None:
 
 def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True,
              robustness: bool | str | None = False,
-             robustness_session: Session | None = None) -> ScenarioResult:
+             robustness_session: Session | None = None,
+             uncertainty: bool = True) -> ScenarioResult:
     """Tune, co-simulate and measure every profile of a single-move scenario.
 
     Parameters
@@ -179,6 +251,10 @@ def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True,
         Session for the map-error runs (default: ``session``); e.g. the fast
         engine's when ``session`` drives the FMUs (same results, see
         ``tests/test_engine.py``), since they are many.
+    uncertainty : bool
+        Score every profile over the scenario's uncertainty (its scoring set,
+        :func:`score_uncertainty`): worst residual, worst-case settling time in
+        the case's band (on by default).
 
     Returns
     -------
@@ -228,10 +304,14 @@ def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True,
         worst = robustness_curves(sc, rs, jerk, errors=WORST_ERRORS).worst(WORST_SPAN)
 
     outcomes = {}
+    scoring = sc.uncertainty.scoring_set() if uncertainty else None
     for prof, run in runs.items():
         met = profile_metrics(run, band, paper_band=paper_band)
+        if scoring is not None:
+            met = dataclasses.replace(met, **score_uncertainty(run, sc, band, scoring))
         outcomes[prof] = ProfileOutcome(
             prof, run if keep_runs else None, tunings[prof], met, run.T_F, run.z_v_max,
             run.z_synced, plan_info=dict(run.plan_info),
             worst_residual_10pct=worst.get(prof, math.nan))
-    return ScenarioResult(sc, outcomes, band, source, paper_band=paper_band, robustness=curves)
+    return ScenarioResult(sc, outcomes, band, source, paper_band=paper_band, robustness=curves,
+                          uncertainty=scoring.label if scoring is not None else "")

@@ -128,6 +128,8 @@ class ScenarioResult:
     robustness : RobustnessResult, optional
         Residual against a map error, in the time-varying plant
         (``run_case(..., robustness="curves")``).
+    uncertainty : str
+        The scoring set the worst cases are taken over (empty: not scored).
     """
 
     scenario: Any
@@ -136,6 +138,7 @@ class ScenarioResult:
     band_source: str
     paper_band: float = math.nan
     robustness: Any = None
+    uncertainty: str = ""
 
     # ------------------------------------------------------------ numbers
 
@@ -190,6 +193,11 @@ class ScenarioResult:
     def has_paper_settling(self) -> bool:
         """Whether a settling time into the paper's band is shown apart (DJL ran, other band)."""
         return math.isfinite(self.paper_band) and self.settle_band.kind != "paper"
+
+    @property
+    def has_uncertainty(self) -> bool:
+        """Whether every profile was scored over the scenario's uncertainty."""
+        return bool(self.uncertainty)
 
     @property
     def has_worst(self) -> bool:
@@ -266,6 +274,12 @@ class ScenarioResult:
                          True))
         if self.has_worst:
             rows.append((f"{WORST_LABEL} [mm]", "worst_residual_10pct", 1e3, False))
+        if self.has_uncertainty:
+            rows += [("Worst residual, uncertainty [mm]", "residual_worst", 1e3, False),
+                     ("Worst-case settling time [s] (same band)", "settling_time_worst", 1.0,
+                      True)]
+        rows += [("Peak |v| [m/s]", "v_peak", 1.0, None), ("Peak |a| [m/s2]", "a_peak", 1.0, None),
+                 ("Peak |j| [m/s3] (never: no jerk limit)", "j_peak", 1.0, None)]
         return rows
 
     def table(self) -> str:
@@ -303,6 +317,9 @@ class ScenarioResult:
                 "time-varying plant, whole map scaled by 1 + e"
             out.append(f"{WORST_LABEL}: largest residual for every f(z) x (1 + e), |e| <= 10 %, "
                        f"jerk times tuned on the nominal map ({rob}).")
+        if self.has_uncertainty:
+            out.append(f"Uncertainty: {self.uncertainty}; the worst cases are over it, every "
+                       f"reference planned on the nominal map, the settling band fixed.")
         if "DJL" in self.profiles and "JL" in self.profiles:
             ch = self.djl_vs_jl_all()
             parts = [f"residual vibration {_pct(ch['residual'], True)}",
@@ -362,6 +379,16 @@ class ScenarioResult:
                 "paper_band_m": self.paper_band,
                 "residual_worst_map10_m": p.worst_residual_10pct,
                 "residual_worst_map10_pct_of_AL": self.relative("worst_residual_10pct", n),
+                # the uncertainty and the peaks (issue 18)
+                "residual_nominal_m": met.residual,
+                "residual_worst_m": met.residual_worst,
+                "settling_time_worst_s": met.settling_time_worst,
+                "worst_point": met.worst_point,
+                "uncertainty": self.uncertainty,
+                "v_peak_m_s": met.v_peak,
+                "a_peak_m_s2": met.a_peak,
+                "j_peak_m_s3": met.j_peak,
+                "jerk_limited": math.isfinite(met.j_peak),
             })
         return out
 

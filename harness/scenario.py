@@ -66,6 +66,14 @@ Format (all lengths in m, times in s, frequencies in Hz)::
     JL_T_F = 0.15                   # optional: impose the JL jerk time
     DJL_T_F = [0.12, 0.13, 0.14, 0.15]   # optional: impose the DJL jerk times
 
+    [uncertainty]                   # optional: how far the real mode map may be off
+    map_scale = 0.1                 # the whole map f(z) off by up to +/-10 % (default)
+    map_slope = 0.3                 # its slope df/dz off by up to +/-30 % (default 0: off)
+    z_shift = 0.05                  # the map shifted along z by up to +/-5 cm (default 0)
+    damping = [0.5, 2.0]            # every damping ratio x 0.5 .. 2 (default: off)
+    # robust tuning minimises over a coarse set of these, every table scores on a
+    # finer one (harness.uncertainty)
+
     [sweep]                         # optional: run the grid of all combinations
     distance = [0.1, 0.2, 0.3]      # replaces move.distance
     z_distance = [0.1, 0.3, 0.5]    # replaces z.distance
@@ -104,6 +112,7 @@ from .fmu.runner import check_fmu_binary, check_fmu_variables, samples_per_step
 from .metrics import DEFAULT_SETTLE_BAND, SettleBand, parse_settle_band
 from .modemap import CantileverLaw, ConstantLaw, LinearLaw, ModeMap, ModeSpec, TableLaw
 from .tuning_options import DJL_METHODS, JL_METHODS, RULES, VARIANTS, TuningOptions
+from .uncertainty import DEFAULT_UNCERTAINTY, UncertaintySpec
 
 __all__ = [
     "CompareSpec",
@@ -309,6 +318,7 @@ class Scenario:
     description: str = ""
     source: str = "<string>"
     map: MapSpec | None = None
+    uncertainty: UncertaintySpec = DEFAULT_UNCERTAINTY
 
     @property
     def is_sweep(self) -> bool:
@@ -755,6 +765,23 @@ def parse_scenario(data: Mapping[str, Any], source: str = "<string>",
     compare = CompareSpec(tuple(profiles), djl_rule, JL_T_F, DJL_T_F, djl_tuning, jl_tuning,
                           map_error, damping, max_motion_time, period_band)
 
+    # [uncertainty]
+    u = _Table(source, "uncertainty", top.raw("uncertainty", {}))
+    u_scale = u.number("map_scale", DEFAULT_UNCERTAINTY.map_scale, nonneg=True,
+                       what="relative error of the whole map, e.g. 0.1")
+    u_slope = u.number("map_slope", 0.0, nonneg=True,
+                       what="relative error of the map's slope, e.g. 0.3")
+    u_shift = u.number("z_shift", 0.0, nonneg=True, what="shift of the map along z in m")
+    u_damp = u.numbers("damping", None, what="damping factor range [lo, hi], e.g. [0.5, 2.0]")
+    u.finish()
+    if u_damp is not None and len(u_damp) != 2:
+        raise u.err("damping", list(u_damp), "must be two factors [lo, hi]")
+    try:
+        uncertainty = UncertaintySpec(u_scale, u_slope, u_shift,
+                                      tuple(u_damp) if u_damp is not None else (1.0, 1.0))
+    except ValueError as e:
+        raise ScenarioError(source, "uncertainty", None, str(e)) from None
+
     # [sweep]
     sweep = None
     if "sweep" in top.data:
@@ -795,7 +822,7 @@ def parse_scenario(data: Mapping[str, Any], source: str = "<string>",
     top.finish()
 
     scen = Scenario(name, move, z, ModeMap(modes, tune_mode - 1), sim, compare, sweep,
-                    description, source, wmap)
+                    description, source, wmap, uncertainty)
     _check_grids(scen)
     # the mode laws must be valid wherever Z goes, in every case
     for case in scen.cases():

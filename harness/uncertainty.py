@@ -135,14 +135,18 @@ class Perturbation:
         return self.slope == 0.0 and self.shift == 0.0 and self.damping == 1.0
 
     def frequencies(self, f_of_z: Callable[[np.ndarray], np.ndarray], z: np.ndarray,
-                    pivot: float) -> np.ndarray:
+                    pivot: float, nominal: np.ndarray | None = None) -> np.ndarray:
         """Return the perturbed frequencies (Hz) at ``z`` of a vectorised law ``f_of_z``.
 
         With only ``scale`` set, ``f_of_z(z) * (1 + scale)``: the very arithmetic of the
         map-error runs (:func:`harness.simulation.master.map_error_residuals`).
+        ``nominal``, if given, is ``f_of_z(z)`` already computed.
         """
         z = np.asarray(z, dtype=float)
-        g = f_of_z(z - self.shift) if self.shift else f_of_z(z)
+        if self.shift:
+            g = f_of_z(z - self.shift)
+        else:
+            g = f_of_z(z) if nominal is None else nominal
         if self.slope:
             gp = float(np.asarray(f_of_z(np.array([pivot - self.shift])))[0])
             g = gp + (1.0 + self.slope) * (g - gp)

@@ -506,7 +506,8 @@ def map_error_residuals(axis: Axis, z_axis: Axis, modes: Sequence[ScheduledMode 
 
 
 def perturbed(run: CoSimResult, modes: Sequence[ScheduledMode | Mode],
-              points: Sequence[Perturbation], pivot: float) -> list[CoSimResult]:
+              points: Sequence[Perturbation], pivot: float, *, full: bool = True
+              ) -> list[CoSimResult]:
     """Return the run on perturbed plants: the reference and the Z move kept, the plant re-run.
 
     The reference was planned on the nominal map and does not change with it;
@@ -525,6 +526,9 @@ def perturbed(run: CoSimResult, modes: Sequence[ScheduledMode | Mode],
         The perturbations.
     pivot : float
         Z position (m) the slope perturbations turn about.
+    full : bool
+        Also the deflection of each mode and the frequencies at every point
+        (for plots); without, those two keep the nominal run's arrays.
 
     Returns
     -------
@@ -539,25 +543,31 @@ def perturbed(run: CoSimResult, modes: Sequence[ScheduledMode | Mode],
     z, v_z = run.z, run.v_z
     zm = hermite_mid(z[:-1], v_z[:-1], z[1:], v_z[1:], h)
     k_end = min(n, math.ceil(run.t_end / h - 1e-9))
-    z_end, z_last = float(z[k_end]), float(z[-1])
+    ends = np.array([z[k_end], z[-1]])
+    nominal_mid = [m.f_array(zm) for m in sm]
+    nominal_end = [m.f_array(ends) for m in sm]
+    nominal_all = [m.f_array(z) for m in sm] if full else None
     out = []
     for p in points:
         pm = [ScheduledMode(m.f_of_z, p.zeta(m.zeta), m.gain, m.name, m.f_of_z_array)
               for m in sm]
-        f_mid = (np.vstack([p.frequencies(m.f_array, zm, pivot) for m in sm]) if n
-                 else np.zeros((len(sm), 0)))
+        f_mid = (np.vstack([p.frequencies(m.f_array, zm, pivot, nominal_mid[i])
+                            for i, m in enumerate(sm)]) if n else np.zeros((len(sm), 0)))
+        f_ends = [p.frequencies(m.f_array, ends, pivot, nominal_end[i])
+                  for i, m in enumerate(sm)]
         eps, states = step_plant(run.plant_input, h, f_mid, pm, n)
-
-        def frozen(m: ScheduledMode, zz: float, p: Perturbation = p) -> Mode:
-            f = float(p.frequencies(m.f_array, np.array([zz]), pivot)[0])
-            return Mode(f, p.zeta(m.zeta), m.gain)
-
+        extra: dict[str, Any] = {}
+        if nominal_all is not None:
+            extra = {"eps_modes": states[:, 0::2].T.copy(),
+                     "f": np.vstack([p.frequencies(m.f_array, z, pivot, nominal_all[i])
+                                     for i, m in enumerate(sm)])}
         out.append(dataclasses.replace(
-            run, eps=eps, eps_modes=states[:, 0::2].T.copy(),
-            f=np.vstack([p.frequencies(m.f_array, z, pivot) for m in sm]),
+            run, eps=eps, **extra,
             state_end=[(float(states[k_end, 2 * i]), float(states[k_end, 2 * i + 1]))
                        for i in range(len(sm))],
-            modes_end=[frozen(m, z_end) for m in sm],
+            modes_end=[Mode(float(f_ends[i][0]), p.zeta(m.zeta), m.gain)
+                       for i, m in enumerate(sm)],
             final_state=[float(s) for s in states[-1]],
-            final_modes=[frozen(m, z_last) for m in sm]))
+            final_modes=[Mode(float(f_ends[i][1]), p.zeta(m.zeta), m.gain)
+                         for i, m in enumerate(sm)]))
     return out
