@@ -1,176 +1,28 @@
 /*
- * fmu_model.c -- FMI-version-independent part of the FMU: parameters,
- * state machine, planning, stepping, logging, FMU state.
+ * fmu_model.c -- the model of the FMU, independent of the FMI version: its
+ * variables (parameters, inputs with their checks, outputs and calculated
+ * parameters), the plan made at the end
+ * of initialisation, DoStep (the profile's time, commands, replans), and the
+ * model's part of an FMU state's validation.  The instance machinery (state
+ * machine, logging, FMU state) is fmu_instance.c's; the generator itself is
+ * the core's (djl_core.h).
  */
-#define DJL_VARS_TABLES
-#include "fmu_model.h"
+#include "fmu_instance.h"
 #include "djl_math.h" /* floor, fmax, ... without libm (see there) */
 
-#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
-static const char *state_name(int s)
-{
-    switch (s) {
-    case MS_START_END: return "StartAndEnd";
-    case MS_INSTANTIATED: return "Instantiated";
-    case MS_INIT: return "InitializationMode";
-    case MS_STEP: return "StepMode";
-    case MS_TERMINATED: return "Terminated";
-    case MS_ERROR: return "Error";
-    }
-    return "?";
-}
+/* ------------------------------------------------------------------------ */
+/* start values and parameters                                              */
 
-static const char *status_category(model_status s)
+void model_defaults(model_data *d)
 {
-    if (s >= ST_ERROR) return djl_log_category_names[DJL_LOG_LOGSTATUSERROR];
-    if (s == ST_WARNING) return djl_log_category_names[DJL_LOG_LOGSTATUSWARNING];
-    return djl_log_category_names[DJL_LOG_LOGEVENTS];
-}
-
-static void vlog(const model_instance *m, model_status status, int category, const char *fmt,
-                 va_list ap)
-{
-    char buf[1024];
-    if (!m->logger) return;
-    if (status < ST_ERROR) {
-        if (!m->logging_on) return;
-        if (category >= 0 && category < DJL_LOG_N && !m->category_on[category]) return;
-    }
-    vsnprintf(buf, sizeof buf, fmt, ap);
-    m->logger(m->logger_env, status,
-              category >= 0 && category < DJL_LOG_N ? djl_log_category_names[category]
-                                                    : status_category(status),
-              buf);
-}
-
-void model_log(const model_instance *m, model_status status, int category, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    vlog(m, status, category, fmt, ap);
-    va_end(ap);
-}
-
-model_status model_fail(model_instance *m, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    vlog(m, ST_ERROR, DJL_LOG_LOGSTATUSERROR, fmt, ap);
-    va_end(ap);
-    m->d.state = MS_ERROR;
-    return ST_ERROR;
-}
-
-model_status model_refuse(model_instance *m, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    vlog(m, ST_ERROR, DJL_LOG_LOGSTATUSERROR, fmt, ap);
-    va_end(ap);
-    return ST_ERROR;
-}
-
-model_status model_null_arg(model_instance *m, const char *fn, const char *arg)
-{
-    return model_refuse(m, "%s: argument %s is a null pointer (nothing was read or written)", fn,
-                        arg);
-}
-
-int model_allowed(model_instance *m, const char *fn, int mask)
-{
-    if (m->d.state & mask) return 1;
-    model_fail(m, "%s must not be called in state %s", fn, state_name(m->d.state));
-    return 0;
-}
-
-static void defaults(model_data *d)
-{
-    memset(d, 0, sizeof(*d));
-    d->magic = MODEL_MAGIC;
-    d->layout = MODEL_LAYOUT;
-    d->size = (uint32_t)sizeof(model_data);
-    strncpy(d->token, DJL_INSTANTIATION_TOKEN, sizeof(d->token) - 1);
     djl_params_default(&d->p);
     d->t_start = 0.0;
     d->start_time = 0.0;
-    d->state = MS_INSTANTIATED;
     d->jerk_source = 1;
     d->f_mode = 10.0;
-}
-
-void model_init(model_instance *m, int fmi_version, const char *instance_name,
-                model_logger logger, void *logger_env, int logging_on)
-{
-    int i;
-    memset(m, 0, sizeof(*m));
-    defaults(&m->d);
-    m->fmi_version = fmi_version;
-    strncpy(m->instance_name, instance_name ? instance_name : "", sizeof(m->instance_name) - 1);
-    m->logger = logger;
-    m->logger_env = logger_env;
-    m->logging_on = logging_on;
-    for (i = 0; i < DJL_LOG_N; i++) m->category_on[i] = 1;
-}
-
-void model_reset(model_instance *m) { defaults(&m->d); }
-
-model_status model_set_debug_logging(model_instance *m, const char *fn, int logging_on, size_t n,
-                                     const char *const categories[])
-{
-    size_t i;
-    int c;
-    if (n > 0 && !categories) return model_null_arg(m, fn, "categories");
-    for (i = 0; i < n; i++)
-        if (!categories[i])
-            return model_refuse(m, "%s: categories[%lu] is a null pointer (nothing was changed)",
-                                fn, (unsigned long)i);
-    m->logging_on = logging_on;
-    if (n == 0) {
-        for (c = 0; c < DJL_LOG_N; c++) m->category_on[c] = logging_on;
-        return ST_OK;
-    }
-    for (c = 0; c < DJL_LOG_N; c++) m->category_on[c] = 0;
-    for (i = 0; i < n; i++) {
-        int found = 0;
-        for (c = 0; c < DJL_LOG_N; c++) {
-            if (strcmp(categories[i], djl_log_category_names[c]) == 0) {
-                m->category_on[c] = logging_on;
-                found = 1;
-            }
-        }
-        if (!found) {
-            model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
-                      "%s: unknown log category \"%s\"", fn, categories[i]);
-            return ST_WARNING;
-        }
-    }
-    return ST_OK;
-}
-
-/* ------------------------------------------------------------------------ */
-/* variables                                                                */
-
-int model_lookup(unsigned int vr, int fmi3, model_var *out)
-{
-    int i;
-    for (i = 0; i < DJL_N_VARS; i++) {
-        const djl_var_info *v = &djl_var_table[i];
-        unsigned int span = fmi3 ? 1u : v->size;
-        if (vr >= v->vr && vr < v->vr + span) {
-            out->base = v->vr;
-            out->index = vr - v->vr;
-            out->type = v->type == 'E' ? 'I' : v->type;
-            out->enumeration = v->type == 'E';
-            out->causality = v->causality;
-            out->size = v->size;
-            out->name = v->name;
-            return 1;
-        }
-    }
-    return 0;
 }
 
 /* The jerk time 1/f_mode in whole samples of Te (round to nearest), 0 if f_mode is
@@ -182,11 +34,6 @@ static int32_t jerk_samples(double f, double Te)
     r = djl_floor(1.0 / (f * Te) + 0.5);
     if (!(r >= 1.0 && r <= (double)DJL_MAX_FILTER_SAMPLES)) return 0;
     return (int32_t)r;
-}
-
-static const char *type_name(char t)
-{
-    return t == 'R' ? "Real" : t == 'I' ? "Integer" : t == 'B' ? "Boolean" : "?";
 }
 
 static double *real_param(model_data *d, unsigned int base, unsigned int index)
@@ -414,7 +261,8 @@ static model_status set_input(model_instance *m, const model_var *v, double valu
         if (!(djl_isfinite(value) && value > 0.0))
             return model_refuse(m, "set: invalid input f_mode = %g Hz: must be a finite frequency "
                                 "> 0 (the previous value, %g Hz, is kept)", value, d->f_mode);
-        if (d->jerk_source >= 2 && (d->state & MS_STEP) && jerk_samples(value, d->p.Te) == 0)
+        if (d->jerk_source >= 2 && (d->state & MS_STEP) &&
+            jerk_samples(value, d->p.Te) == 0)
             return model_refuse(m, "set: invalid input f_mode = %g Hz: its period, %g s, is "
                                 "outside [Te/2, %d Te] at Te = %g s (the previous value, %g Hz, "
                                 "is kept)", value, 1.0 / value, DJL_MAX_FILTER_SAMPLES, d->p.Te,
@@ -435,7 +283,7 @@ model_status model_set(model_instance *m, unsigned int vr, char type, double val
         return model_fail(m, "set: unknown value reference %u", vr);
     if (v.type != type)
         return model_fail(m, "set: %s (value reference %u) is a %s, not a %s", v.name, vr,
-                          type_name(v.type), type_name(type));
+                          model_type_name(v.type), model_type_name(type));
     if (v.causality == 'i') return set_input(m, &v, value);
     if (v.causality != 'p')
         return model_fail(m, "set: %s (value reference %u) is %s: it cannot be set", v.name, vr,
@@ -444,7 +292,7 @@ model_status model_set(model_instance *m, unsigned int vr, char type, double val
                                                : "a calculated parameter");
     if (!(d->state & (MS_INSTANTIATED | MS_INIT)))
         return model_fail(m, "set: %s is a fixed parameter: it can be set only before the end of "
-                          "initialization (state is %s)", v.name, state_name(d->state));
+                          "initialization (state is %s)", v.name, model_state_name(d->state));
     if (type == 'R') {
         double *p = real_param(d, v.base, v.index);
         if (!p) return model_fail(m, "set: internal error, no storage for %s", v.name);
@@ -504,7 +352,7 @@ model_status model_get(model_instance *m, unsigned int vr, char type, double *va
         return model_fail(m, "get: unknown value reference %u", vr);
     if (v.type != type)
         return model_fail(m, "get: %s (value reference %u) is a %s, not a %s", v.name, vr,
-                          type_name(v.type), type_name(type));
+                          model_type_name(v.type), model_type_name(type));
     if (v.causality == 't') {
         *value = d->t_now;
         return ST_OK;
@@ -557,7 +405,7 @@ model_status model_get(model_instance *m, unsigned int vr, char type, double *va
 }
 
 /* ------------------------------------------------------------------------ */
-/* state machine                                                            */
+/* initialisation                                                           */
 
 model_status model_setup(model_instance *m, double start_time)
 {
@@ -569,13 +417,7 @@ model_status model_setup(model_instance *m, double start_time)
     return ST_OK;
 }
 
-model_status model_enter_init(model_instance *m)
-{
-    m->d.state = MS_INIT;
-    return ST_OK;
-}
-
-model_status model_exit_init(model_instance *m)
+model_status model_start(model_instance *m)
 {
     model_status st = ensure_plan(m, "ExitInitializationMode");
     if (st != ST_OK) return st;
@@ -584,9 +426,11 @@ model_status model_exit_init(model_instance *m)
     m->d.f_seen = m->d.f_mode; /* and f_mode's rate of change (jerk_source = 3) */
     m->d.t_seen = m->d.t_now;
     m->d.f_rate = 0.0;
-    m->d.state = MS_STEP;
     return ST_OK;
 }
+
+/* ------------------------------------------------------------------------ */
+/* DoStep                                                                   */
 
 /* Tolerance between a communication point and the FMU's own time: the rounding a master
  * may make computing it (t += h, or start + i h: a few units in the last place), or a
@@ -629,7 +473,7 @@ static model_status replan_at(model_instance *m, double t, double u, const djl_g
     model_data *d = &m->d;
     djl_replan_info info;
     djl_error err;
-    djl_status st = djl_replan(&d->plan, u, g, &d->plan, &m->scratch, &info, &err);
+    djl_status st = djl_replan(&d->plan, u, g, &d->plan, &m->w.scratch, &info, &err);
     if (st != DJL_OK)
         return model_refuse(m, "DoStep at t = %.17g s: %s: %s: %s (nothing was done)", t, why,
                             djl_status_name(st), err.message);
@@ -660,8 +504,8 @@ static int stop_kept(model_instance *m, double t, double u0, djl_goal *g)
     if (!ahead) return 0;
     g->kind = DJL_GOAL_STOP;
     /* the stop, planned aside (a stop uses no work space of its own) */
-    if (djl_replan(pl, u0, g, &m->scratch, &m->scratch, &info, &err) != DJL_OK) return 0;
-    if ((double)m->scratch.k_end + (double)info.origin < (double)pl->k_end) return 0;
+    if (djl_replan(pl, u0, g, &m->w.scratch, &m->w.scratch, &info, &err) != DJL_OK) return 0;
+    if ((double)m->w.scratch.k_end + (double)info.origin < (double)pl->k_end) return 0;
     model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
               "t = %.17g s: stop: the move in progress already slows down to rest, and no "
               "later than a stop would (at %.17g s): it is kept", t,
@@ -756,7 +600,7 @@ static model_status commands(model_instance *m, double t, double u0, double du)
         djl_status st;
         double o;
         if (!djl_jerk_times_due(&d->plan, from, u_end, g.N, now, &at)) break;
-        st = djl_replan(&d->plan, at, &g, &d->plan, &m->scratch, &info, &err);
+        st = djl_replan(&d->plan, at, &g, &d->plan, &m->w.scratch, &info, &err);
         if (st == DJL_E_INFEASIBLE) {
             /* the jerk time of f_mode no longer lands from here without stopping and
              * coming back: the stage keeps the one it was planned with */
@@ -802,16 +646,16 @@ model_status model_do_step(model_instance *m, double t, double h)
         return model_fail(m, "DoStep: %.17g s + a step of %g s is not a finite time", t, h);
     /* The profile's time advances by h exactly: in whole samples when h is one (to a
      * millionth of a sample, as always), else by whole samples plus a phase. */
-    if (h == m->step_h && d->p.Te == m->step_Te) { /* the same step as last time */
-        whole = m->step_whole;
+    if (h == m->w.step_h && d->p.Te == m->w.step_Te) { /* the same step as last time */
+        whole = m->w.step_whole;
         phase = d->phase;
     } else if (r = h / d->p.Te, k = djl_floor(r + 0.5),
                k >= 1.0 && djl_fabs(r - k) <= 1e-6 + 1e-12 * k) {
         whole = k;
         phase = d->phase;
-        m->step_h = h; /* remembered: a master's next step is usually the same */
-        m->step_Te = d->p.Te;
-        m->step_whole = k;
+        m->w.step_h = h; /* remembered: a master's next step is usually the same */
+        m->w.step_Te = d->p.Te;
+        m->w.step_whole = k;
     } else {
         double f = d->phase + (r - djl_floor(r));
         whole = djl_floor(r) + djl_floor(f);
@@ -839,33 +683,8 @@ model_status model_do_step(model_instance *m, double t, double h)
     return ST_OK;
 }
 
-model_status model_terminate(model_instance *m)
-{
-    m->d.state = MS_TERMINATED;
-    return ST_OK;
-}
-
-size_t model_state_size(void) { return sizeof(model_data); }
-
-/* 64-bit FNV-1a over every byte of the state but the checksum itself (the
- * padding is included: model_data is zeroed before use and copied whole). */
-uint64_t model_state_checksum(const model_data *d)
-{
-    const unsigned char *b = (const unsigned char *)d;
-    size_t i, skip = offsetof(model_data, checksum);
-    uint64_t h = 0xcbf29ce484222325u;
-    for (i = 0; i < sizeof(model_data); i++) {
-        if (i == skip) {
-            i += sizeof(d->checksum) - 1;
-            continue;
-        }
-        h ^= b[i];
-        h *= 0x100000001b3u;
-    }
-    return h;
-}
-
-void model_state_seal(model_data *d) { d->checksum = model_state_checksum(d); }
+/* ------------------------------------------------------------------------ */
+/* the model's part of an FMU state's validation                            */
 
 static int finite_all(const double *x, size_t n)
 {
@@ -895,18 +714,11 @@ static int same_sample(const djl_sample *a, const djl_sample *b)
            a->segment == b->segment && a->stage == b->stage;
 }
 
-/* Structure of a state (header already checked): NULL if sound, else why not. */
-static const char *state_flaw(const model_data *d, char *why, size_t nwhy)
+const char *model_state_flaw(const model_data *d)
 {
     const djl_plan *pl = &d->plan;
     int32_t i, cur;
     djl_sample o;
-    if (d->state != MS_INSTANTIATED && d->state != MS_INIT && d->state != MS_STEP &&
-        d->state != MS_TERMINATED) {
-        snprintf(why, nwhy, "state machine value %ld is not one a state can be saved in",
-                 (long)d->state);
-        return why;
-    }
     if (d->planned != 0 && d->planned != 1) return "the planned flag is neither 0 nor 1";
     if (!djl_isfinite(d->start_time)) return "the start time is not finite";
     if (d->n < 0 || d->n > DJL_MAX_MOTION_SAMPLES) return "the sample counter is out of range";
@@ -992,28 +804,4 @@ static const char *state_flaw(const model_data *d, char *why, size_t nwhy)
     if (cur != d->cursor || !same_sample(&o, &d->out))
         return "its outputs are not those of its plan at its time";
     return NULL;
-}
-
-model_status model_state_check(model_instance *m, const char *fn, const void *bytes, size_t size)
-{
-    model_data d;
-    const char *flaw;
-    char why[128];
-    if (!bytes) return model_null_arg(m, fn, "FMU state");
-    if (size != sizeof(model_data))
-        return model_refuse(m, "%s: FMU state of %lu bytes, expected %lu (made by another version "
-                            "of the FMU?)", fn, (unsigned long)size,
-                            (unsigned long)sizeof(model_data));
-    memcpy(&d, bytes, sizeof d);
-    if (d.magic != MODEL_MAGIC || d.layout != MODEL_LAYOUT || d.size != sizeof(model_data))
-        return model_refuse(m, "%s: not a state of this FMU (bad header)", fn);
-    if (memchr(d.token, '\0', sizeof d.token) == NULL ||
-        strcmp(d.token, DJL_INSTANTIATION_TOKEN) != 0)
-        return model_refuse(m, "%s: FMU state made by an FMU with another instantiation token "
-                            "(%.40s), this one is %s", fn, d.token, DJL_INSTANTIATION_TOKEN);
-    if (d.checksum != model_state_checksum(&d))
-        return model_refuse(m, "%s: FMU state damaged (checksum mismatch): refused", fn);
-    flaw = state_flaw(&d, why, sizeof why);
-    if (flaw) return model_refuse(m, "%s: FMU state refused: %s", fn, flaw);
-    return ST_OK;
 }
