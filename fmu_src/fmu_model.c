@@ -1,12 +1,13 @@
 /*
  * fmu_model.c -- the model of the FMU, independent of the FMI version: its
- * variables (parameters, inputs with their checks, outputs and calculated
- * parameters), the plan made at the end
+ * variables (parameters through djl_vars.h's generated table, inputs with
+ * their checks, outputs and calculated parameters), the plan made at the end
  * of initialisation, DoStep (the profile's time, commands, replans), and the
  * model's part of an FMU state's validation.  The instance machinery (state
  * machine, logging, FMU state) is fmu_instance.c's; the generator itself is
  * the core's (djl_core.h).
  */
+#define DJL_VARS_PARAMETERS
 #include "fmu_instance.h"
 #include "djl_math.h" /* floor, fmax, ... without libm (see there) */
 
@@ -21,8 +22,28 @@ void model_defaults(model_data *d)
     djl_params_default(&d->p);
     d->t_start = 0.0;
     d->start_time = 0.0;
-    d->jerk_source = 1;
+    d->jerk_source = JERK_SOURCE_PARAMETERS;
     d->f_mode = 10.0;
+}
+
+/* Where element index of parameter base (its value reference) is stored (djl_vars.h's
+ * djl_param_table): a double for a Real, an int32_t for an Integer or an Enumeration;
+ * NULL if it is not a parameter. */
+static void *param_field(model_data *d, unsigned int base, unsigned int index)
+{
+    int i;
+    for (i = 0; i < DJL_N_PARAMS; i++) {
+        const djl_param_info *pi = &djl_param_table[i];
+        if (pi->vr != base) continue;
+        if (index >= pi->size) return NULL;
+        switch (pi->home) {
+        case DJL_HOME_PARAMS: return (char *)&d->p + pi->offset + index * sizeof(double);
+        case DJL_HOME_T_START: return &d->t_start;
+        case DJL_HOME_JERK_SOURCE: return &d->jerk_source;
+        default: return NULL;
+        }
+    }
+    return NULL;
 }
 
 /* The jerk time 1/f_mode in whole samples of Te (round to nearest), 0 if f_mode is
@@ -36,39 +57,6 @@ static int32_t jerk_samples(double f, double Te)
     return (int32_t)r;
 }
 
-static double *real_param(model_data *d, unsigned int base, unsigned int index)
-{
-    switch (base) {
-    case VR_TE: return &d->p.Te;
-    case VR_T_START: return &d->t_start;
-    case VR_X0: return &d->p.x0;
-    case VR_DISTANCE: return &d->p.distance;
-    case VR_V_MAX: return &d->p.v_max;
-    case VR_A_MAX: return &d->p.a_max;
-    case VR_D_MAX: return &d->p.d_max;
-    case VR_T_F1: return &d->p.T_F[0];
-    case VR_T_F2: return &d->p.T_F[1];
-    case VR_T_F3: return &d->p.T_F[2];
-    case VR_T_F4: return &d->p.T_F[3];
-    case VR_V0: return &d->p.v0;
-    case VR_V_E: return &d->p.v_e;
-    case VR_SEG_DISTANCE: return &d->p.seg_distance[index];
-    case VR_SEG_V_END: return &d->p.seg_v_end[index];
-    default: return NULL;
-    }
-}
-
-static int32_t *int_param(model_data *d, unsigned int base)
-{
-    switch (base) {
-    case VR_PROFILE: return &d->p.profile;
-    case VR_SHORT_STAGE: return &d->p.short_stage;
-    case VR_N_SEGMENTS: return &d->p.n_segments;
-    case VR_JERK_SOURCE: return &d->jerk_source;
-    default: return NULL;
-    }
-}
-
 static void evaluate(model_data *d)
 {
     double u = (double)d->n - d->offset + d->phase;
@@ -78,13 +66,12 @@ static void evaluate(model_data *d)
 static void log_plan(const model_instance *m)
 {
     const djl_plan *pl = &m->d.plan;
-    static const char *const pname[] = {"", "AL", "JL", "DJL"};
     int i;
     model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
               "planned %s move: %d segment(s), %.17g m in %.17g s (%lld samples of Te = %g s), "
               "v_reached = %.17g m/s, a_reached = %.17g m/s2, d_reached = %.17g m/s2, "
               "jerk times %d/%d/%d/%d samples",
-              pname[pl->p.profile], (int)pl->n_segments, pl->x_target, djl_motion_time(pl),
+              djl_profile_names[pl->p.profile], (int)pl->n_segments, pl->x_target, djl_motion_time(pl),
               (long long)pl->k_end, pl->p.Te, pl->v_reached, pl->a_reached, pl->d_reached,
               (int)pl->N[0], (int)pl->N[1], (int)pl->N[2], (int)pl->N[3]);
     for (i = 0; i < 4; i++) {
@@ -175,20 +162,20 @@ static model_status ensure_plan(model_instance *m, const char *fn)
     djl_status st;
     model_status st2;
     double off;
+    int shifted;
     model_data *d = &m->d;
     if (d->planned) return ST_OK;
     djl_params q = d->p;
-    if (!djl_isfinite(d->t_start))
-        return model_fail(m, "%s: invalid parameter t_start = %g s: must be finite", fn,
-                          d->t_start);
-    if (d->jerk_source < 1 || d->jerk_source > 3)
+    if (djl_check_t_start(d->t_start, d->start_time, &err) != DJL_OK)
+        return model_fail(m, "%s: %s", fn, err.message);
+    if (d->jerk_source < JERK_SOURCE_PARAMETERS || d->jerk_source > JERK_SOURCE_F_MODE_AHEAD)
         return model_fail(m, "%s: invalid parameter jerk_source = %d: must be 1 (the jerk times "
                           "T_F1..T_F4), 2 (from the input f_mode) or 3 (from f_mode "
                           "extrapolated to each stage's start)", fn, (int)d->jerk_source);
-    if (d->jerk_source >= 2) {
+    if (d->jerk_source >= JERK_SOURCE_F_MODE) {
         int32_t Nf = jerk_samples(d->f_mode, d->p.Te);
         int i;
-        if (d->p.profile == DJL_PROFILE_AL)
+        if (d->p.profile == PROFILE_AL)
             return model_fail(m, "%s: invalid parameter jerk_source = %d with profile = 1 (AL): "
                               "an AL profile has no jerk time to take from f_mode; use profile "
                               "2 or 3", fn, (int)d->jerk_source);
@@ -204,31 +191,21 @@ static model_status ensure_plan(model_instance *m, const char *fn)
                                 DJL_MAX_FILTER_SAMPLES, d->p.Te);
         if (djl_validate(&q, &err) != DJL_OK)
             return model_fail(m, "%s: %s: %s", fn, djl_status_name(DJL_E_PARAM), err.message);
-        q.profile = DJL_PROFILE_DJL;
+        q.profile = PROFILE_DJL;
         for (i = 0; i < 4; i++) q.T_F[i] = (double)Nf * q.Te;
     }
     st = djl_plan_motion(&q, &d->plan, &err);
     if (st != DJL_OK)
         return model_fail(m, "%s: %s: %s", fn, djl_status_name(st), err.message);
-    /* The generator samples at start_time + n Te: the motion starts at the
-     * first of those samples at or after t_start. */
-    off = (d->t_start - d->start_time) / d->p.Te;
-    if (!djl_isfinite(off) || djl_fabs(off) > 1e15)
-        return model_fail(m, "%s: t_start = %g s is %g samples of Te = %g s away from the start "
-                          "time %g s: too far", fn, d->t_start, off, d->p.Te, d->start_time);
-    /* on a sample to rounding: 1e-9 of the offset, or what t_start and the start time
-     * can resolve at their magnitude (2.4e-7 s at 1.7e9 s) */
-    if (djl_fabs(off - djl_floor(off + 0.5)) <=
-        djl_fmax(1e-9 * (1.0 + djl_fabs(off)),
-                 4.0 * ulp(djl_fmax(djl_fabs(d->t_start), djl_fabs(d->start_time))) / d->p.Te))
-        off = djl_floor(off + 0.5);
-    else {
-        off = djl_ceil(off);
+    /* The generator samples at start_time + n Te: the motion starts at the first of those
+     * samples at or after t_start (the core's rule). */
+    if (djl_start_offset(d->t_start, d->start_time, d->p.Te, &off, &shifted, &err) != DJL_OK)
+        return model_fail(m, "%s: %s", fn, err.message);
+    if (shifted)
         model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
                   "t_start = %.17g s is not a sample of the generator (start time %.17g s + k Te, "
                   "Te = %.17g s): the motion starts at the next sample, %.17g s", d->t_start,
                   d->start_time, d->p.Te, d->start_time + off * d->p.Te);
-    }
     if ((st2 = check_range(m, fn, off)) != ST_OK) return st2;
     d->offset = off;
     d->cursor = 0;
@@ -261,7 +238,7 @@ static model_status set_input(model_instance *m, const model_var *v, double valu
         if (!(djl_isfinite(value) && value > 0.0))
             return model_refuse(m, "set: invalid input f_mode = %g Hz: must be a finite frequency "
                                 "> 0 (the previous value, %g Hz, is kept)", value, d->f_mode);
-        if (d->jerk_source >= 2 && (d->state & MS_STEP) &&
+        if (d->jerk_source >= JERK_SOURCE_F_MODE && (d->state & MS_STEP) &&
             jerk_samples(value, d->p.Te) == 0)
             return model_refuse(m, "set: invalid input f_mode = %g Hz: its period, %g s, is "
                                 "outside [Te/2, %d Te] at Te = %g s (the previous value, %g Hz, "
@@ -293,17 +270,17 @@ model_status model_set(model_instance *m, unsigned int vr, char type, double val
     if (!(d->state & (MS_INSTANTIATED | MS_INIT)))
         return model_fail(m, "set: %s is a fixed parameter: it can be set only before the end of "
                           "initialization (state is %s)", v.name, model_state_name(d->state));
-    if (type == 'R') {
-        double *p = real_param(d, v.base, v.index);
+    if (type == 'R' || type == 'I') {
+        void *p = param_field(d, v.base, v.index);
         if (!p) return model_fail(m, "set: internal error, no storage for %s", v.name);
-        *p = value;
-    } else if (type == 'I') {
-        int32_t *p = int_param(d, v.base);
-        if (!p) return model_fail(m, "set: internal error, no storage for %s", v.name);
-        if (!(value >= -2147483648.0 && value <= 2147483647.0))
-            return model_refuse(m, "set: %s = %.17g is out of the range of a 32-bit integer "
-                                "(nothing was changed)", v.name, value);
-        *p = (int32_t)value;
+        if (type == 'R') {
+            *(double *)p = value;
+        } else {
+            if (!(value >= -2147483648.0 && value <= 2147483647.0))
+                return model_refuse(m, "set: %s = %.17g is out of the range of a 32-bit integer "
+                                    "(nothing was changed)", v.name, value);
+            *(int32_t *)p = (int32_t)value;
+        }
     }
     d->planned = 0;
     return ST_OK;
@@ -367,11 +344,9 @@ model_status model_get(model_instance *m, unsigned int vr, char type, double *va
         return ST_OK;
     }
     if (v.causality == 'p') {
-        if (type == 'R') {
-            *value = *real_param(d, v.base, v.index);
-        } else {
-            *value = (double)*int_param(d, v.base);
-        }
+        const void *p = param_field(d, v.base, v.index);
+        if (!p) return model_fail(m, "get: internal error, no storage for %s", v.name);
+        *value = type == 'R' ? *(const double *)p : (double)*(const int32_t *)p;
         return ST_OK;
     }
     if (d->state == MS_ERROR && !d->planned) {
@@ -547,7 +522,7 @@ static model_status commands(model_instance *m, double t, double u0, double du)
     djl_goal g;
     int i, it, now;
     memset(&g, 0, sizeof g);
-    if (d->jerk_source >= 2) {
+    if (d->jerk_source >= JERK_SOURCE_F_MODE) {
         int32_t Nf = jerk_samples(d->f_mode, d->p.Te);
         if (Nf == 0)
             return model_refuse(m, "DoStep at t = %.17g s: invalid input f_mode = %g Hz: with "
@@ -555,7 +530,7 @@ static model_status commands(model_instance *m, double t, double u0, double du)
                                 "samples of Te = %g s (nothing was done)", t, d->f_mode,
                                 (int)d->jerk_source, DJL_MAX_FILTER_SAMPLES, d->p.Te);
         for (i = 0; i < 4; i++) g.N[i] = Nf;
-        if (d->jerk_source == 3) {
+        if (d->jerk_source == JERK_SOURCE_F_MODE_AHEAD) {
             /* f_mode's rate of change over the last step, then each stage's jerk time
              * from f_mode extrapolated to where the plan starts it */
             if (t > d->t_seen) d->f_rate = (d->f_mode - d->f_seen) / (t - d->t_seen);
@@ -582,7 +557,7 @@ static model_status commands(model_instance *m, double t, double u0, double du)
     }
     d->stop_seen = d->stop;
     d->execute_seen = d->execute;
-    if (d->jerk_source < 2) return ST_OK;
+    if (d->jerk_source < JERK_SOURCE_F_MODE) return ST_OK;
     /* jerk times from f_mode: a stage that starts within the step with another jerk
      * time is replanned as it starts; while cruising or speeding up, the stages to
      * come are replanned at once (a stop or the landing then falls on the right
@@ -670,7 +645,8 @@ model_status model_do_step(model_instance *m, double t, double h)
     if (!(whole + (double)d->n + phase <= (double)DJL_MAX_MOTION_SAMPLES))
         return model_fail(m, "DoStep: communication step %g s takes the FMU past %g samples of "
                           "Te = %g s", h, (double)DJL_MAX_MOTION_SAMPLES, d->p.Te);
-    if (d->execute != d->execute_seen || d->stop != d->stop_seen || d->jerk_source >= 2) {
+    if (d->execute != d->execute_seen || d->stop != d->stop_seen ||
+        d->jerk_source >= JERK_SOURCE_F_MODE) {
         model_status st = commands(m, t, (double)d->n - d->offset + d->phase,
                                    whole + phase - d->phase);
         if (st != ST_OK) return st;
@@ -726,7 +702,8 @@ const char *model_state_flaw(const model_data *d)
     if (!djl_isfinite(d->t_now)) return "the communication time is not finite";
     if ((d->state & (MS_STEP | MS_TERMINATED)) && !d->planned)
         return "a state after initialization without a plan";
-    if (d->jerk_source < 1 || d->jerk_source > 3) return "jerk_source is not 1, 2 or 3";
+    if (d->jerk_source < JERK_SOURCE_PARAMETERS || d->jerk_source > JERK_SOURCE_F_MODE_AHEAD)
+        return "jerk_source is not 1, 2 or 3";
     if (!djl_isfinite(d->f_seen) || !djl_isfinite(d->t_seen) || !djl_isfinite(d->f_rate))
         return "f_mode's rate of change is not finite";
     if ((d->execute | d->stop | d->execute_seen | d->stop_seen) & ~1)
@@ -749,9 +726,9 @@ const char *model_state_flaw(const model_data *d)
         if (d->first.N[i] < 0 || d->first.N[i] > DJL_MAX_FILTER_SAMPLES)
             return "a jerk time of the parametric move is out of range";
     if (pl->replanned != 0 && pl->replanned != 1) return "the replanned flag is neither 0 nor 1";
-    if (!pl->replanned && d->jerk_source == 1 && !same_params(&d->p, &pl->p))
+    if (!pl->replanned && d->jerk_source == JERK_SOURCE_PARAMETERS && !same_params(&d->p, &pl->p))
         return "its plan was not made from its parameters";
-    if (pl->replanned || d->jerk_source >= 2) {
+    if (pl->replanned || d->jerk_source >= JERK_SOURCE_F_MODE) {
         /* a plan of its own (a replan, or jerk times from f_mode): sound values */
         double v[7];
         v[0] = pl->p.Te; v[1] = pl->p.x0; v[2] = pl->p.v0; v[3] = pl->p.v_max;
