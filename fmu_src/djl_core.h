@@ -185,6 +185,28 @@ double djl_motion_time(const djl_plan *plan);
 const char *djl_status_name(djl_status s);
 
 /* ------------------------------------------------------------------------ */
+/* the motion on a sample grid (djl_eval.c)                                  */
+
+/* A generator samples at start_time + k Te (k whole).  The motion starts at the
+ * first of those samples at or after t_start; a t_start within rounding of a
+ * sample counts as on it: within 1e-9 of its offset (1 + |offset| samples), or
+ * within 4 ulp of the larger of |t_start| and |start_time| (what they resolve
+ * at their magnitude: 2.4e-7 s at 1.7e9 s).
+ *
+ * djl_check_t_start: t_start (and the start time) finite, else DJL_E_PARAM
+ * naming t_start.
+ *
+ * djl_start_offset: that check, then the sample: *offset = k (a whole number,
+ * |k| <= 1e15; the motion's sample u = 0 is the grid's sample k) and *shifted
+ * = 1 when t_start was not on the grid (moved to the next sample), 0 when it
+ * was.  DJL_E_PARAM naming t_start when it lies more than 1e15 samples away;
+ * naming Te when Te is not a finite number > 0 (a valid plan's is).  On error
+ * *offset and *shifted are left as they were. */
+djl_status djl_check_t_start(double t_start, double start_time, djl_error *err);
+djl_status djl_start_offset(double t_start, double start_time, double Te, double *offset,
+                            int *shifted, djl_error *err);
+
+/* ------------------------------------------------------------------------ */
 /* replanning a move in progress (djl_replan.c)                              */
 
 typedef enum { DJL_GOAL_TARGET = 1, DJL_GOAL_STOP = 2 } djl_goal_kind;

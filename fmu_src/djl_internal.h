@@ -16,7 +16,8 @@
  *                   started kept, the stage in progress ended, a new segment
  *                   planned from the state the ramps settle to; and when jerk
  *                   times read from a frequency call for it (djl_jerk_times_due)
- *   djl_eval.c      a sample of a plan (djl_eval)
+ *   djl_eval.c      a sample of a plan (djl_eval); the sample of a grid at
+ *                   which the motion starts (djl_start_offset)
  *
  * Functions shared between the files are declared DJL_INTERNAL: external and
  * hidden (the visibility pragma below), so the FMU exports none of them.

@@ -62,6 +62,24 @@ typedef enum {
     DJL_LOG_N = 3
 } djl_log_category;
 
+/* enumeration items (model description types), <TYPE>_<ITEM> = value */
+typedef enum {
+    PROFILE_AL = 1,
+    PROFILE_JL = 2,
+    PROFILE_DJL = 3,
+} djl_enum_profile;
+
+typedef enum {
+    SHORT_STAGE_STRETCH = 1,
+    SHORT_STAGE_OVERLAP = 2,
+} djl_enum_short_stage;
+
+typedef enum {
+    JERK_SOURCE_PARAMETERS = 1,
+    JERK_SOURCE_F_MODE = 2,
+    JERK_SOURCE_F_MODE_AHEAD = 3,
+} djl_enum_jerk_source;
+
 #ifdef DJL_VARS_TABLES
 /* Variable table: FMI 2 element value reference = vr + index (arrays). */
 typedef struct {
@@ -127,5 +145,85 @@ static const char *const djl_log_category_names[] = {
     "logStatusError",
 };
 #endif /* DJL_VARS_TABLES */
+
+#ifdef DJL_VARS_PARAMETERS
+#include <stddef.h>
+#include <stdint.h>
+
+#include "djl_core.h"
+
+/* Where a parameter is stored: a field of djl_params (djl_core.h), or beside it
+ * (a parameter the core does not take; each user of the table keeps its own). */
+typedef enum {
+    DJL_HOME_PARAMS = 0,
+    DJL_HOME_JERK_SOURCE = 1,
+    DJL_HOME_T_START = 2,
+} djl_param_home;
+
+/* Parameter table: element i of an array at offset + i * sizeof(double). */
+typedef struct {
+    unsigned int vr;
+    const char *name;
+    char type;           /* 'R' double; 'I' Integer and 'E' Enumeration: int32_t */
+    unsigned short size; /* elements */
+    unsigned char home;  /* djl_param_home */
+    size_t offset;       /* DJL_HOME_PARAMS: offset of the field in djl_params */
+} djl_param_info;
+
+static const djl_param_info djl_param_table[] = {
+    {VR_PROFILE, "profile", 'E', 1, DJL_HOME_PARAMS, offsetof(djl_params, profile)},
+    {VR_TE, "Te", 'R', 1, DJL_HOME_PARAMS, offsetof(djl_params, Te)},
+    {VR_T_START, "t_start", 'R', 1, DJL_HOME_T_START, 0},
+    {VR_X0, "x0", 'R', 1, DJL_HOME_PARAMS, offsetof(djl_params, x0)},
+    {VR_DISTANCE, "distance", 'R', 1, DJL_HOME_PARAMS, offsetof(djl_params, distance)},
+    {VR_V_MAX, "v_max", 'R', 1, DJL_HOME_PARAMS, offsetof(djl_params, v_max)},
+    {VR_A_MAX, "a_max", 'R', 1, DJL_HOME_PARAMS, offsetof(djl_params, a_max)},
+    {VR_D_MAX, "d_max", 'R', 1, DJL_HOME_PARAMS, offsetof(djl_params, d_max)},
+    {VR_T_F1, "T_F1", 'R', 1, DJL_HOME_PARAMS, offsetof(djl_params, T_F[0])},
+    {VR_T_F2, "T_F2", 'R', 1, DJL_HOME_PARAMS, offsetof(djl_params, T_F[1])},
+    {VR_T_F3, "T_F3", 'R', 1, DJL_HOME_PARAMS, offsetof(djl_params, T_F[2])},
+    {VR_T_F4, "T_F4", 'R', 1, DJL_HOME_PARAMS, offsetof(djl_params, T_F[3])},
+    {VR_V0, "v0", 'R', 1, DJL_HOME_PARAMS, offsetof(djl_params, v0)},
+    {VR_V_E, "v_e", 'R', 1, DJL_HOME_PARAMS, offsetof(djl_params, v_e)},
+    {VR_SHORT_STAGE, "short_stage", 'E', 1, DJL_HOME_PARAMS, offsetof(djl_params, short_stage)},
+    {VR_N_SEGMENTS, "n_segments", 'I', 1, DJL_HOME_PARAMS, offsetof(djl_params, n_segments)},
+    {VR_JERK_SOURCE, "jerk_source", 'E', 1, DJL_HOME_JERK_SOURCE, 0},
+    {VR_SEG_DISTANCE, "seg_distance", 'R', 32, DJL_HOME_PARAMS, offsetof(djl_params, seg_distance)},
+    {VR_SEG_V_END, "seg_v_end", 'R', 32, DJL_HOME_PARAMS, offsetof(djl_params, seg_v_end)},
+};
+#define DJL_N_PARAMS 19
+
+/* Compile-time checks: each field of djl_params has its parameter's type and size, and
+ * the enumeration codes are the core's. */
+typedef char djl_param_table_check[(
+    sizeof(((djl_params *)0)->profile) == 1 * sizeof(int32_t) &&
+    sizeof(((djl_params *)0)->Te) == 1 * sizeof(double) &&
+    sizeof(((djl_params *)0)->x0) == 1 * sizeof(double) &&
+    sizeof(((djl_params *)0)->distance) == 1 * sizeof(double) &&
+    sizeof(((djl_params *)0)->v_max) == 1 * sizeof(double) &&
+    sizeof(((djl_params *)0)->a_max) == 1 * sizeof(double) &&
+    sizeof(((djl_params *)0)->d_max) == 1 * sizeof(double) &&
+    sizeof(((djl_params *)0)->T_F[0]) == 1 * sizeof(double) &&
+    sizeof(((djl_params *)0)->T_F[1]) == 1 * sizeof(double) &&
+    sizeof(((djl_params *)0)->T_F[2]) == 1 * sizeof(double) &&
+    sizeof(((djl_params *)0)->T_F[3]) == 1 * sizeof(double) &&
+    sizeof(((djl_params *)0)->v0) == 1 * sizeof(double) &&
+    sizeof(((djl_params *)0)->v_e) == 1 * sizeof(double) &&
+    sizeof(((djl_params *)0)->short_stage) == 1 * sizeof(int32_t) &&
+    sizeof(((djl_params *)0)->n_segments) == 1 * sizeof(int32_t) &&
+    sizeof(((djl_params *)0)->seg_distance) == 32 * sizeof(double) &&
+    sizeof(((djl_params *)0)->seg_v_end) == 32 * sizeof(double)
+    ) ? 1 : -1];
+typedef char djl_enum_check[((int)PROFILE_AL == (int)DJL_PROFILE_AL &&
+    (int)PROFILE_JL == (int)DJL_PROFILE_JL &&
+    (int)PROFILE_DJL == (int)DJL_PROFILE_DJL &&
+    (int)SHORT_STAGE_STRETCH == (int)DJL_SHORT_STRETCH &&
+    (int)SHORT_STAGE_OVERLAP == (int)DJL_SHORT_OVERLAP) ? 1 : -1];
+
+/* item names by value ("" where no item has the value) */
+static const char *const djl_profile_names[] = {"", "AL", "JL", "DJL"};
+static const char *const djl_short_stage_names[] = {"", "stretch", "overlap"};
+static const char *const djl_jerk_source_names[] = {"", "parameters", "f_mode", "f_mode_ahead"};
+#endif /* DJL_VARS_PARAMETERS */
 
 #endif /* DJL_VARS_H */

@@ -1,13 +1,13 @@
 /*
  * fmi2.c -- FMI 2.0 co-simulation interface: a thin translation of the FMI 2
- * API onto fmu_model.c.  Built with the FMI headers shipped by the importer
- * (fmpy: fmpy/c-code).
+ * API onto the instance (fmu_instance.c) and the model (fmu_model.c).  Built
+ * with the FMI headers shipped by the importer (fmpy: fmpy/c-code).
  */
 #include <stdlib.h>
 #include <string.h>
 
 #include "fmi2Functions.h"
-#include "fmu_model.h"
+#include "fmu_instance.h"
 
 typedef struct {
     model_instance m;

@@ -1,13 +1,13 @@
 /*
  * fmi3.c -- FMI 3.0 co-simulation interface: a thin translation of the FMI 3
- * API onto fmu_model.c.  Array variables (seg_distance, seg_v_end) are
- * expanded to their elements.
+ * API onto the instance (fmu_instance.c) and the model (fmu_model.c).  Array
+ * variables (seg_distance, seg_v_end) are expanded to their elements.
  */
 #include <stdlib.h>
 #include <string.h>
 
 #include "fmi3Functions.h"
-#include "fmu_model.h"
+#include "fmu_instance.h"
 
 typedef struct {
     model_instance m;

@@ -1,176 +1,49 @@
 /*
- * fmu_model.c -- FMI-version-independent part of the FMU: parameters,
- * state machine, planning, stepping, logging, FMU state.
+ * fmu_model.c -- the model of the FMU, independent of the FMI version: its
+ * variables (parameters through djl_vars.h's generated table, inputs with
+ * their checks, outputs and calculated parameters), the plan made at the end
+ * of initialisation, DoStep (the profile's time, commands, replans), and the
+ * model's part of an FMU state's validation.  The instance machinery (state
+ * machine, logging, FMU state) is fmu_instance.c's; the generator itself is
+ * the core's (djl_core.h).
  */
-#define DJL_VARS_TABLES
-#include "fmu_model.h"
+#define DJL_VARS_PARAMETERS
+#include "fmu_instance.h"
 #include "djl_math.h" /* floor, fmax, ... without libm (see there) */
 
-#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
-static const char *state_name(int s)
-{
-    switch (s) {
-    case MS_START_END: return "StartAndEnd";
-    case MS_INSTANTIATED: return "Instantiated";
-    case MS_INIT: return "InitializationMode";
-    case MS_STEP: return "StepMode";
-    case MS_TERMINATED: return "Terminated";
-    case MS_ERROR: return "Error";
-    }
-    return "?";
-}
+/* ------------------------------------------------------------------------ */
+/* start values and parameters                                              */
 
-static const char *status_category(model_status s)
+void model_defaults(model_data *d)
 {
-    if (s >= ST_ERROR) return djl_log_category_names[DJL_LOG_LOGSTATUSERROR];
-    if (s == ST_WARNING) return djl_log_category_names[DJL_LOG_LOGSTATUSWARNING];
-    return djl_log_category_names[DJL_LOG_LOGEVENTS];
-}
-
-static void vlog(const model_instance *m, model_status status, int category, const char *fmt,
-                 va_list ap)
-{
-    char buf[1024];
-    if (!m->logger) return;
-    if (status < ST_ERROR) {
-        if (!m->logging_on) return;
-        if (category >= 0 && category < DJL_LOG_N && !m->category_on[category]) return;
-    }
-    vsnprintf(buf, sizeof buf, fmt, ap);
-    m->logger(m->logger_env, status,
-              category >= 0 && category < DJL_LOG_N ? djl_log_category_names[category]
-                                                    : status_category(status),
-              buf);
-}
-
-void model_log(const model_instance *m, model_status status, int category, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    vlog(m, status, category, fmt, ap);
-    va_end(ap);
-}
-
-model_status model_fail(model_instance *m, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    vlog(m, ST_ERROR, DJL_LOG_LOGSTATUSERROR, fmt, ap);
-    va_end(ap);
-    m->d.state = MS_ERROR;
-    return ST_ERROR;
-}
-
-model_status model_refuse(model_instance *m, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    vlog(m, ST_ERROR, DJL_LOG_LOGSTATUSERROR, fmt, ap);
-    va_end(ap);
-    return ST_ERROR;
-}
-
-model_status model_null_arg(model_instance *m, const char *fn, const char *arg)
-{
-    return model_refuse(m, "%s: argument %s is a null pointer (nothing was read or written)", fn,
-                        arg);
-}
-
-int model_allowed(model_instance *m, const char *fn, int mask)
-{
-    if (m->d.state & mask) return 1;
-    model_fail(m, "%s must not be called in state %s", fn, state_name(m->d.state));
-    return 0;
-}
-
-static void defaults(model_data *d)
-{
-    memset(d, 0, sizeof(*d));
-    d->magic = MODEL_MAGIC;
-    d->layout = MODEL_LAYOUT;
-    d->size = (uint32_t)sizeof(model_data);
-    strncpy(d->token, DJL_INSTANTIATION_TOKEN, sizeof(d->token) - 1);
     djl_params_default(&d->p);
     d->t_start = 0.0;
     d->start_time = 0.0;
-    d->state = MS_INSTANTIATED;
-    d->jerk_source = 1;
+    d->jerk_source = JERK_SOURCE_PARAMETERS;
     d->f_mode = 10.0;
 }
 
-void model_init(model_instance *m, int fmi_version, const char *instance_name,
-                model_logger logger, void *logger_env, int logging_on)
+/* Where element index of parameter base (its value reference) is stored (djl_vars.h's
+ * djl_param_table): a double for a Real, an int32_t for an Integer or an Enumeration;
+ * NULL if it is not a parameter. */
+static void *param_field(model_data *d, unsigned int base, unsigned int index)
 {
     int i;
-    memset(m, 0, sizeof(*m));
-    defaults(&m->d);
-    m->fmi_version = fmi_version;
-    strncpy(m->instance_name, instance_name ? instance_name : "", sizeof(m->instance_name) - 1);
-    m->logger = logger;
-    m->logger_env = logger_env;
-    m->logging_on = logging_on;
-    for (i = 0; i < DJL_LOG_N; i++) m->category_on[i] = 1;
-}
-
-void model_reset(model_instance *m) { defaults(&m->d); }
-
-model_status model_set_debug_logging(model_instance *m, const char *fn, int logging_on, size_t n,
-                                     const char *const categories[])
-{
-    size_t i;
-    int c;
-    if (n > 0 && !categories) return model_null_arg(m, fn, "categories");
-    for (i = 0; i < n; i++)
-        if (!categories[i])
-            return model_refuse(m, "%s: categories[%lu] is a null pointer (nothing was changed)",
-                                fn, (unsigned long)i);
-    m->logging_on = logging_on;
-    if (n == 0) {
-        for (c = 0; c < DJL_LOG_N; c++) m->category_on[c] = logging_on;
-        return ST_OK;
-    }
-    for (c = 0; c < DJL_LOG_N; c++) m->category_on[c] = 0;
-    for (i = 0; i < n; i++) {
-        int found = 0;
-        for (c = 0; c < DJL_LOG_N; c++) {
-            if (strcmp(categories[i], djl_log_category_names[c]) == 0) {
-                m->category_on[c] = logging_on;
-                found = 1;
-            }
-        }
-        if (!found) {
-            model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
-                      "%s: unknown log category \"%s\"", fn, categories[i]);
-            return ST_WARNING;
+    for (i = 0; i < DJL_N_PARAMS; i++) {
+        const djl_param_info *pi = &djl_param_table[i];
+        if (pi->vr != base) continue;
+        if (index >= pi->size) return NULL;
+        switch (pi->home) {
+        case DJL_HOME_PARAMS: return (char *)&d->p + pi->offset + index * sizeof(double);
+        case DJL_HOME_T_START: return &d->t_start;
+        case DJL_HOME_JERK_SOURCE: return &d->jerk_source;
+        default: return NULL;
         }
     }
-    return ST_OK;
-}
-
-/* ------------------------------------------------------------------------ */
-/* variables                                                                */
-
-int model_lookup(unsigned int vr, int fmi3, model_var *out)
-{
-    int i;
-    for (i = 0; i < DJL_N_VARS; i++) {
-        const djl_var_info *v = &djl_var_table[i];
-        unsigned int span = fmi3 ? 1u : v->size;
-        if (vr >= v->vr && vr < v->vr + span) {
-            out->base = v->vr;
-            out->index = vr - v->vr;
-            out->type = v->type == 'E' ? 'I' : v->type;
-            out->enumeration = v->type == 'E';
-            out->causality = v->causality;
-            out->size = v->size;
-            out->name = v->name;
-            return 1;
-        }
-    }
-    return 0;
+    return NULL;
 }
 
 /* The jerk time 1/f_mode in whole samples of Te (round to nearest), 0 if f_mode is
@@ -184,44 +57,6 @@ static int32_t jerk_samples(double f, double Te)
     return (int32_t)r;
 }
 
-static const char *type_name(char t)
-{
-    return t == 'R' ? "Real" : t == 'I' ? "Integer" : t == 'B' ? "Boolean" : "?";
-}
-
-static double *real_param(model_data *d, unsigned int base, unsigned int index)
-{
-    switch (base) {
-    case VR_TE: return &d->p.Te;
-    case VR_T_START: return &d->t_start;
-    case VR_X0: return &d->p.x0;
-    case VR_DISTANCE: return &d->p.distance;
-    case VR_V_MAX: return &d->p.v_max;
-    case VR_A_MAX: return &d->p.a_max;
-    case VR_D_MAX: return &d->p.d_max;
-    case VR_T_F1: return &d->p.T_F[0];
-    case VR_T_F2: return &d->p.T_F[1];
-    case VR_T_F3: return &d->p.T_F[2];
-    case VR_T_F4: return &d->p.T_F[3];
-    case VR_V0: return &d->p.v0;
-    case VR_V_E: return &d->p.v_e;
-    case VR_SEG_DISTANCE: return &d->p.seg_distance[index];
-    case VR_SEG_V_END: return &d->p.seg_v_end[index];
-    default: return NULL;
-    }
-}
-
-static int32_t *int_param(model_data *d, unsigned int base)
-{
-    switch (base) {
-    case VR_PROFILE: return &d->p.profile;
-    case VR_SHORT_STAGE: return &d->p.short_stage;
-    case VR_N_SEGMENTS: return &d->p.n_segments;
-    case VR_JERK_SOURCE: return &d->jerk_source;
-    default: return NULL;
-    }
-}
-
 static void evaluate(model_data *d)
 {
     double u = (double)d->n - d->offset + d->phase;
@@ -231,13 +66,12 @@ static void evaluate(model_data *d)
 static void log_plan(const model_instance *m)
 {
     const djl_plan *pl = &m->d.plan;
-    static const char *const pname[] = {"", "AL", "JL", "DJL"};
     int i;
     model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
               "planned %s move: %d segment(s), %.17g m in %.17g s (%lld samples of Te = %g s), "
               "v_reached = %.17g m/s, a_reached = %.17g m/s2, d_reached = %.17g m/s2, "
               "jerk times %d/%d/%d/%d samples",
-              pname[pl->p.profile], (int)pl->n_segments, pl->x_target, djl_motion_time(pl),
+              djl_profile_names[pl->p.profile], (int)pl->n_segments, pl->x_target, djl_motion_time(pl),
               (long long)pl->k_end, pl->p.Te, pl->v_reached, pl->a_reached, pl->d_reached,
               (int)pl->N[0], (int)pl->N[1], (int)pl->N[2], (int)pl->N[3]);
     for (i = 0; i < 4; i++) {
@@ -328,20 +162,20 @@ static model_status ensure_plan(model_instance *m, const char *fn)
     djl_status st;
     model_status st2;
     double off;
+    int shifted;
     model_data *d = &m->d;
     if (d->planned) return ST_OK;
     djl_params q = d->p;
-    if (!djl_isfinite(d->t_start))
-        return model_fail(m, "%s: invalid parameter t_start = %g s: must be finite", fn,
-                          d->t_start);
-    if (d->jerk_source < 1 || d->jerk_source > 3)
+    if (djl_check_t_start(d->t_start, d->start_time, &err) != DJL_OK)
+        return model_fail(m, "%s: %s", fn, err.message);
+    if (d->jerk_source < JERK_SOURCE_PARAMETERS || d->jerk_source > JERK_SOURCE_F_MODE_AHEAD)
         return model_fail(m, "%s: invalid parameter jerk_source = %d: must be 1 (the jerk times "
                           "T_F1..T_F4), 2 (from the input f_mode) or 3 (from f_mode "
                           "extrapolated to each stage's start)", fn, (int)d->jerk_source);
-    if (d->jerk_source >= 2) {
+    if (d->jerk_source >= JERK_SOURCE_F_MODE) {
         int32_t Nf = jerk_samples(d->f_mode, d->p.Te);
         int i;
-        if (d->p.profile == DJL_PROFILE_AL)
+        if (d->p.profile == PROFILE_AL)
             return model_fail(m, "%s: invalid parameter jerk_source = %d with profile = 1 (AL): "
                               "an AL profile has no jerk time to take from f_mode; use profile "
                               "2 or 3", fn, (int)d->jerk_source);
@@ -357,31 +191,21 @@ static model_status ensure_plan(model_instance *m, const char *fn)
                                 DJL_MAX_FILTER_SAMPLES, d->p.Te);
         if (djl_validate(&q, &err) != DJL_OK)
             return model_fail(m, "%s: %s: %s", fn, djl_status_name(DJL_E_PARAM), err.message);
-        q.profile = DJL_PROFILE_DJL;
+        q.profile = PROFILE_DJL;
         for (i = 0; i < 4; i++) q.T_F[i] = (double)Nf * q.Te;
     }
     st = djl_plan_motion(&q, &d->plan, &err);
     if (st != DJL_OK)
         return model_fail(m, "%s: %s: %s", fn, djl_status_name(st), err.message);
-    /* The generator samples at start_time + n Te: the motion starts at the
-     * first of those samples at or after t_start. */
-    off = (d->t_start - d->start_time) / d->p.Te;
-    if (!djl_isfinite(off) || djl_fabs(off) > 1e15)
-        return model_fail(m, "%s: t_start = %g s is %g samples of Te = %g s away from the start "
-                          "time %g s: too far", fn, d->t_start, off, d->p.Te, d->start_time);
-    /* on a sample to rounding: 1e-9 of the offset, or what t_start and the start time
-     * can resolve at their magnitude (2.4e-7 s at 1.7e9 s) */
-    if (djl_fabs(off - djl_floor(off + 0.5)) <=
-        djl_fmax(1e-9 * (1.0 + djl_fabs(off)),
-                 4.0 * ulp(djl_fmax(djl_fabs(d->t_start), djl_fabs(d->start_time))) / d->p.Te))
-        off = djl_floor(off + 0.5);
-    else {
-        off = djl_ceil(off);
+    /* The generator samples at start_time + n Te: the motion starts at the first of those
+     * samples at or after t_start (the core's rule). */
+    if (djl_start_offset(d->t_start, d->start_time, d->p.Te, &off, &shifted, &err) != DJL_OK)
+        return model_fail(m, "%s: %s", fn, err.message);
+    if (shifted)
         model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
                   "t_start = %.17g s is not a sample of the generator (start time %.17g s + k Te, "
                   "Te = %.17g s): the motion starts at the next sample, %.17g s", d->t_start,
                   d->start_time, d->p.Te, d->start_time + off * d->p.Te);
-    }
     if ((st2 = check_range(m, fn, off)) != ST_OK) return st2;
     d->offset = off;
     d->cursor = 0;
@@ -414,7 +238,8 @@ static model_status set_input(model_instance *m, const model_var *v, double valu
         if (!(djl_isfinite(value) && value > 0.0))
             return model_refuse(m, "set: invalid input f_mode = %g Hz: must be a finite frequency "
                                 "> 0 (the previous value, %g Hz, is kept)", value, d->f_mode);
-        if (d->jerk_source >= 2 && (d->state & MS_STEP) && jerk_samples(value, d->p.Te) == 0)
+        if (d->jerk_source >= JERK_SOURCE_F_MODE && (d->state & MS_STEP) &&
+            jerk_samples(value, d->p.Te) == 0)
             return model_refuse(m, "set: invalid input f_mode = %g Hz: its period, %g s, is "
                                 "outside [Te/2, %d Te] at Te = %g s (the previous value, %g Hz, "
                                 "is kept)", value, 1.0 / value, DJL_MAX_FILTER_SAMPLES, d->p.Te,
@@ -435,7 +260,7 @@ model_status model_set(model_instance *m, unsigned int vr, char type, double val
         return model_fail(m, "set: unknown value reference %u", vr);
     if (v.type != type)
         return model_fail(m, "set: %s (value reference %u) is a %s, not a %s", v.name, vr,
-                          type_name(v.type), type_name(type));
+                          model_type_name(v.type), model_type_name(type));
     if (v.causality == 'i') return set_input(m, &v, value);
     if (v.causality != 'p')
         return model_fail(m, "set: %s (value reference %u) is %s: it cannot be set", v.name, vr,
@@ -444,18 +269,18 @@ model_status model_set(model_instance *m, unsigned int vr, char type, double val
                                                : "a calculated parameter");
     if (!(d->state & (MS_INSTANTIATED | MS_INIT)))
         return model_fail(m, "set: %s is a fixed parameter: it can be set only before the end of "
-                          "initialization (state is %s)", v.name, state_name(d->state));
-    if (type == 'R') {
-        double *p = real_param(d, v.base, v.index);
+                          "initialization (state is %s)", v.name, model_state_name(d->state));
+    if (type == 'R' || type == 'I') {
+        void *p = param_field(d, v.base, v.index);
         if (!p) return model_fail(m, "set: internal error, no storage for %s", v.name);
-        *p = value;
-    } else if (type == 'I') {
-        int32_t *p = int_param(d, v.base);
-        if (!p) return model_fail(m, "set: internal error, no storage for %s", v.name);
-        if (!(value >= -2147483648.0 && value <= 2147483647.0))
-            return model_refuse(m, "set: %s = %.17g is out of the range of a 32-bit integer "
-                                "(nothing was changed)", v.name, value);
-        *p = (int32_t)value;
+        if (type == 'R') {
+            *(double *)p = value;
+        } else {
+            if (!(value >= -2147483648.0 && value <= 2147483647.0))
+                return model_refuse(m, "set: %s = %.17g is out of the range of a 32-bit integer "
+                                    "(nothing was changed)", v.name, value);
+            *(int32_t *)p = (int32_t)value;
+        }
     }
     d->planned = 0;
     return ST_OK;
@@ -504,7 +329,7 @@ model_status model_get(model_instance *m, unsigned int vr, char type, double *va
         return model_fail(m, "get: unknown value reference %u", vr);
     if (v.type != type)
         return model_fail(m, "get: %s (value reference %u) is a %s, not a %s", v.name, vr,
-                          type_name(v.type), type_name(type));
+                          model_type_name(v.type), model_type_name(type));
     if (v.causality == 't') {
         *value = d->t_now;
         return ST_OK;
@@ -519,11 +344,9 @@ model_status model_get(model_instance *m, unsigned int vr, char type, double *va
         return ST_OK;
     }
     if (v.causality == 'p') {
-        if (type == 'R') {
-            *value = *real_param(d, v.base, v.index);
-        } else {
-            *value = (double)*int_param(d, v.base);
-        }
+        const void *p = param_field(d, v.base, v.index);
+        if (!p) return model_fail(m, "get: internal error, no storage for %s", v.name);
+        *value = type == 'R' ? *(const double *)p : (double)*(const int32_t *)p;
         return ST_OK;
     }
     if (d->state == MS_ERROR && !d->planned) {
@@ -557,7 +380,7 @@ model_status model_get(model_instance *m, unsigned int vr, char type, double *va
 }
 
 /* ------------------------------------------------------------------------ */
-/* state machine                                                            */
+/* initialisation                                                           */
 
 model_status model_setup(model_instance *m, double start_time)
 {
@@ -569,13 +392,7 @@ model_status model_setup(model_instance *m, double start_time)
     return ST_OK;
 }
 
-model_status model_enter_init(model_instance *m)
-{
-    m->d.state = MS_INIT;
-    return ST_OK;
-}
-
-model_status model_exit_init(model_instance *m)
+model_status model_start(model_instance *m)
 {
     model_status st = ensure_plan(m, "ExitInitializationMode");
     if (st != ST_OK) return st;
@@ -584,9 +401,11 @@ model_status model_exit_init(model_instance *m)
     m->d.f_seen = m->d.f_mode; /* and f_mode's rate of change (jerk_source = 3) */
     m->d.t_seen = m->d.t_now;
     m->d.f_rate = 0.0;
-    m->d.state = MS_STEP;
     return ST_OK;
 }
+
+/* ------------------------------------------------------------------------ */
+/* DoStep                                                                   */
 
 /* Tolerance between a communication point and the FMU's own time: the rounding a master
  * may make computing it (t += h, or start + i h: a few units in the last place), or a
@@ -629,7 +448,7 @@ static model_status replan_at(model_instance *m, double t, double u, const djl_g
     model_data *d = &m->d;
     djl_replan_info info;
     djl_error err;
-    djl_status st = djl_replan(&d->plan, u, g, &d->plan, &m->scratch, &info, &err);
+    djl_status st = djl_replan(&d->plan, u, g, &d->plan, &m->w.scratch, &info, &err);
     if (st != DJL_OK)
         return model_refuse(m, "DoStep at t = %.17g s: %s: %s: %s (nothing was done)", t, why,
                             djl_status_name(st), err.message);
@@ -660,8 +479,8 @@ static int stop_kept(model_instance *m, double t, double u0, djl_goal *g)
     if (!ahead) return 0;
     g->kind = DJL_GOAL_STOP;
     /* the stop, planned aside (a stop uses no work space of its own) */
-    if (djl_replan(pl, u0, g, &m->scratch, &m->scratch, &info, &err) != DJL_OK) return 0;
-    if ((double)m->scratch.k_end + (double)info.origin < (double)pl->k_end) return 0;
+    if (djl_replan(pl, u0, g, &m->w.scratch, &m->w.scratch, &info, &err) != DJL_OK) return 0;
+    if ((double)m->w.scratch.k_end + (double)info.origin < (double)pl->k_end) return 0;
     model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
               "t = %.17g s: stop: the move in progress already slows down to rest, and no "
               "later than a stop would (at %.17g s): it is kept", t,
@@ -703,7 +522,7 @@ static model_status commands(model_instance *m, double t, double u0, double du)
     djl_goal g;
     int i, it, now;
     memset(&g, 0, sizeof g);
-    if (d->jerk_source >= 2) {
+    if (d->jerk_source >= JERK_SOURCE_F_MODE) {
         int32_t Nf = jerk_samples(d->f_mode, d->p.Te);
         if (Nf == 0)
             return model_refuse(m, "DoStep at t = %.17g s: invalid input f_mode = %g Hz: with "
@@ -711,7 +530,7 @@ static model_status commands(model_instance *m, double t, double u0, double du)
                                 "samples of Te = %g s (nothing was done)", t, d->f_mode,
                                 (int)d->jerk_source, DJL_MAX_FILTER_SAMPLES, d->p.Te);
         for (i = 0; i < 4; i++) g.N[i] = Nf;
-        if (d->jerk_source == 3) {
+        if (d->jerk_source == JERK_SOURCE_F_MODE_AHEAD) {
             /* f_mode's rate of change over the last step, then each stage's jerk time
              * from f_mode extrapolated to where the plan starts it */
             if (t > d->t_seen) d->f_rate = (d->f_mode - d->f_seen) / (t - d->t_seen);
@@ -738,7 +557,7 @@ static model_status commands(model_instance *m, double t, double u0, double du)
     }
     d->stop_seen = d->stop;
     d->execute_seen = d->execute;
-    if (d->jerk_source < 2) return ST_OK;
+    if (d->jerk_source < JERK_SOURCE_F_MODE) return ST_OK;
     /* jerk times from f_mode: a stage that starts within the step with another jerk
      * time is replanned as it starts; while cruising or speeding up, the stages to
      * come are replanned at once (a stop or the landing then falls on the right
@@ -756,7 +575,7 @@ static model_status commands(model_instance *m, double t, double u0, double du)
         djl_status st;
         double o;
         if (!djl_jerk_times_due(&d->plan, from, u_end, g.N, now, &at)) break;
-        st = djl_replan(&d->plan, at, &g, &d->plan, &m->scratch, &info, &err);
+        st = djl_replan(&d->plan, at, &g, &d->plan, &m->w.scratch, &info, &err);
         if (st == DJL_E_INFEASIBLE) {
             /* the jerk time of f_mode no longer lands from here without stopping and
              * coming back: the stage keeps the one it was planned with */
@@ -802,16 +621,16 @@ model_status model_do_step(model_instance *m, double t, double h)
         return model_fail(m, "DoStep: %.17g s + a step of %g s is not a finite time", t, h);
     /* The profile's time advances by h exactly: in whole samples when h is one (to a
      * millionth of a sample, as always), else by whole samples plus a phase. */
-    if (h == m->step_h && d->p.Te == m->step_Te) { /* the same step as last time */
-        whole = m->step_whole;
+    if (h == m->w.step_h && d->p.Te == m->w.step_Te) { /* the same step as last time */
+        whole = m->w.step_whole;
         phase = d->phase;
     } else if (r = h / d->p.Te, k = djl_floor(r + 0.5),
                k >= 1.0 && djl_fabs(r - k) <= 1e-6 + 1e-12 * k) {
         whole = k;
         phase = d->phase;
-        m->step_h = h; /* remembered: a master's next step is usually the same */
-        m->step_Te = d->p.Te;
-        m->step_whole = k;
+        m->w.step_h = h; /* remembered: a master's next step is usually the same */
+        m->w.step_Te = d->p.Te;
+        m->w.step_whole = k;
     } else {
         double f = d->phase + (r - djl_floor(r));
         whole = djl_floor(r) + djl_floor(f);
@@ -826,7 +645,8 @@ model_status model_do_step(model_instance *m, double t, double h)
     if (!(whole + (double)d->n + phase <= (double)DJL_MAX_MOTION_SAMPLES))
         return model_fail(m, "DoStep: communication step %g s takes the FMU past %g samples of "
                           "Te = %g s", h, (double)DJL_MAX_MOTION_SAMPLES, d->p.Te);
-    if (d->execute != d->execute_seen || d->stop != d->stop_seen || d->jerk_source >= 2) {
+    if (d->execute != d->execute_seen || d->stop != d->stop_seen ||
+        d->jerk_source >= JERK_SOURCE_F_MODE) {
         model_status st = commands(m, t, (double)d->n - d->offset + d->phase,
                                    whole + phase - d->phase);
         if (st != ST_OK) return st;
@@ -839,33 +659,8 @@ model_status model_do_step(model_instance *m, double t, double h)
     return ST_OK;
 }
 
-model_status model_terminate(model_instance *m)
-{
-    m->d.state = MS_TERMINATED;
-    return ST_OK;
-}
-
-size_t model_state_size(void) { return sizeof(model_data); }
-
-/* 64-bit FNV-1a over every byte of the state but the checksum itself (the
- * padding is included: model_data is zeroed before use and copied whole). */
-uint64_t model_state_checksum(const model_data *d)
-{
-    const unsigned char *b = (const unsigned char *)d;
-    size_t i, skip = offsetof(model_data, checksum);
-    uint64_t h = 0xcbf29ce484222325u;
-    for (i = 0; i < sizeof(model_data); i++) {
-        if (i == skip) {
-            i += sizeof(d->checksum) - 1;
-            continue;
-        }
-        h ^= b[i];
-        h *= 0x100000001b3u;
-    }
-    return h;
-}
-
-void model_state_seal(model_data *d) { d->checksum = model_state_checksum(d); }
+/* ------------------------------------------------------------------------ */
+/* the model's part of an FMU state's validation                            */
 
 static int finite_all(const double *x, size_t n)
 {
@@ -895,18 +690,11 @@ static int same_sample(const djl_sample *a, const djl_sample *b)
            a->segment == b->segment && a->stage == b->stage;
 }
 
-/* Structure of a state (header already checked): NULL if sound, else why not. */
-static const char *state_flaw(const model_data *d, char *why, size_t nwhy)
+const char *model_state_flaw(const model_data *d)
 {
     const djl_plan *pl = &d->plan;
     int32_t i, cur;
     djl_sample o;
-    if (d->state != MS_INSTANTIATED && d->state != MS_INIT && d->state != MS_STEP &&
-        d->state != MS_TERMINATED) {
-        snprintf(why, nwhy, "state machine value %ld is not one a state can be saved in",
-                 (long)d->state);
-        return why;
-    }
     if (d->planned != 0 && d->planned != 1) return "the planned flag is neither 0 nor 1";
     if (!djl_isfinite(d->start_time)) return "the start time is not finite";
     if (d->n < 0 || d->n > DJL_MAX_MOTION_SAMPLES) return "the sample counter is out of range";
@@ -914,7 +702,8 @@ static const char *state_flaw(const model_data *d, char *why, size_t nwhy)
     if (!djl_isfinite(d->t_now)) return "the communication time is not finite";
     if ((d->state & (MS_STEP | MS_TERMINATED)) && !d->planned)
         return "a state after initialization without a plan";
-    if (d->jerk_source < 1 || d->jerk_source > 3) return "jerk_source is not 1, 2 or 3";
+    if (d->jerk_source < JERK_SOURCE_PARAMETERS || d->jerk_source > JERK_SOURCE_F_MODE_AHEAD)
+        return "jerk_source is not 1, 2 or 3";
     if (!djl_isfinite(d->f_seen) || !djl_isfinite(d->t_seen) || !djl_isfinite(d->f_rate))
         return "f_mode's rate of change is not finite";
     if ((d->execute | d->stop | d->execute_seen | d->stop_seen) & ~1)
@@ -937,9 +726,9 @@ static const char *state_flaw(const model_data *d, char *why, size_t nwhy)
         if (d->first.N[i] < 0 || d->first.N[i] > DJL_MAX_FILTER_SAMPLES)
             return "a jerk time of the parametric move is out of range";
     if (pl->replanned != 0 && pl->replanned != 1) return "the replanned flag is neither 0 nor 1";
-    if (!pl->replanned && d->jerk_source == 1 && !same_params(&d->p, &pl->p))
+    if (!pl->replanned && d->jerk_source == JERK_SOURCE_PARAMETERS && !same_params(&d->p, &pl->p))
         return "its plan was not made from its parameters";
-    if (pl->replanned || d->jerk_source >= 2) {
+    if (pl->replanned || d->jerk_source >= JERK_SOURCE_F_MODE) {
         /* a plan of its own (a replan, or jerk times from f_mode): sound values */
         double v[7];
         v[0] = pl->p.Te; v[1] = pl->p.x0; v[2] = pl->p.v0; v[3] = pl->p.v_max;
@@ -992,28 +781,4 @@ static const char *state_flaw(const model_data *d, char *why, size_t nwhy)
     if (cur != d->cursor || !same_sample(&o, &d->out))
         return "its outputs are not those of its plan at its time";
     return NULL;
-}
-
-model_status model_state_check(model_instance *m, const char *fn, const void *bytes, size_t size)
-{
-    model_data d;
-    const char *flaw;
-    char why[128];
-    if (!bytes) return model_null_arg(m, fn, "FMU state");
-    if (size != sizeof(model_data))
-        return model_refuse(m, "%s: FMU state of %lu bytes, expected %lu (made by another version "
-                            "of the FMU?)", fn, (unsigned long)size,
-                            (unsigned long)sizeof(model_data));
-    memcpy(&d, bytes, sizeof d);
-    if (d.magic != MODEL_MAGIC || d.layout != MODEL_LAYOUT || d.size != sizeof(model_data))
-        return model_refuse(m, "%s: not a state of this FMU (bad header)", fn);
-    if (memchr(d.token, '\0', sizeof d.token) == NULL ||
-        strcmp(d.token, DJL_INSTANTIATION_TOKEN) != 0)
-        return model_refuse(m, "%s: FMU state made by an FMU with another instantiation token "
-                            "(%.40s), this one is %s", fn, d.token, DJL_INSTANTIATION_TOKEN);
-    if (d.checksum != model_state_checksum(&d))
-        return model_refuse(m, "%s: FMU state damaged (checksum mismatch): refused", fn);
-    flaw = state_flaw(&d, why, sizeof why);
-    if (flaw) return model_refuse(m, "%s: FMU state refused: %s", fn, flaw);
-    return ST_OK;
 }

@@ -7,7 +7,9 @@
  *  - plan a move with the FMU's own generator core (fmu_src/djl_*.c: the
  *    very code the FMU runs, linked in, not re-implemented) and sample it on
  *    the FMU's time grid (start time + n Te, the motion starting at the first
- *    sample at or after t_start, exactly as fmu_model.c does);
+ *    sample at or after t_start: the core's djl_start_offset, which the FMU
+ *    calls too); the FMU's parameters are read by name through the table the
+ *    FMU uses (djl_vars.h, generated from harness/fmu/spec.py);
  *  - synchronise the Z move (bisection on v_max, the same arithmetic as
  *    harness.planner.sync_z_velocity);
  *  - step the scheduled plant: every mode advanced exactly over each step for
@@ -26,6 +28,8 @@
 #include <string.h>
 
 #include "djl_core.h"
+#define DJL_VARS_PARAMETERS /* djl_param_table: where each FMU parameter is stored */
+#include "djl_vars.h"
 
 /* 2 pi as Python's 2.0 * math.pi (doubling is exact) */
 #define DJL_TWO_PI 6.283185307179586476925286766559
@@ -114,52 +118,63 @@ static int get_array(PyObject *v, const char *key, double *out, int n)
     return 0;
 }
 
+/* The FMU parameters the engine takes: the core's and t_start (not jerk_source: the engine
+ * plans the parametric move, jerk times from the parameters). */
+typedef struct {
+    djl_params p;
+    double t_start;
+} engine_params;
+
+/* Where the table's parameter is stored in e, NULL if the engine does not take it. */
+static void *param_field(engine_params *e, const djl_param_info *pi)
+{
+    switch (pi->home) {
+    case DJL_HOME_PARAMS: return (char *)&e->p + pi->offset;
+    case DJL_HOME_T_START: return &e->t_start;
+    default: return NULL;
+    }
+}
+
 /* Fill p (from the defaults) and t_start from a dict of FMU parameter names. */
 static int parse_params(PyObject *dict, djl_params *p, double *t_start)
 {
     PyObject *key, *value;
     Py_ssize_t pos = 0;
-    djl_params_default(p);
-    *t_start = 0.0;
+    engine_params e;
+    djl_params_default(&e.p);
+    e.t_start = 0.0;
     if (!PyDict_Check(dict)) {
         PyErr_SetString(PyExc_TypeError, "params must be a dict of FMU parameter names");
         return -1;
     }
     while (PyDict_Next(dict, &pos, &key, &value)) {
+        const djl_param_info *pi = NULL;
         const char *k;
-        int rc;
+        void *field = NULL;
+        int i, rc;
         if (!PyUnicode_Check(key)) {
             PyErr_Format(PyExc_TypeError, "parameter names must be strings, got %R", key);
             return -1;
         }
         k = PyUnicode_AsUTF8(key);
         if (!k) return -1;
-        if (!strcmp(k, "profile")) rc = get_int32(value, k, &p->profile);
-        else if (!strcmp(k, "short_stage")) rc = get_int32(value, k, &p->short_stage);
-        else if (!strcmp(k, "n_segments")) rc = get_int32(value, k, &p->n_segments);
-        else if (!strcmp(k, "Te")) rc = get_double(value, k, &p->Te);
-        else if (!strcmp(k, "t_start")) rc = get_double(value, k, t_start);
-        else if (!strcmp(k, "x0")) rc = get_double(value, k, &p->x0);
-        else if (!strcmp(k, "v0")) rc = get_double(value, k, &p->v0);
-        else if (!strcmp(k, "distance")) rc = get_double(value, k, &p->distance);
-        else if (!strcmp(k, "v_e")) rc = get_double(value, k, &p->v_e);
-        else if (!strcmp(k, "v_max")) rc = get_double(value, k, &p->v_max);
-        else if (!strcmp(k, "a_max")) rc = get_double(value, k, &p->a_max);
-        else if (!strcmp(k, "d_max")) rc = get_double(value, k, &p->d_max);
-        else if (!strcmp(k, "T_F1")) rc = get_double(value, k, &p->T_F[0]);
-        else if (!strcmp(k, "T_F2")) rc = get_double(value, k, &p->T_F[1]);
-        else if (!strcmp(k, "T_F3")) rc = get_double(value, k, &p->T_F[2]);
-        else if (!strcmp(k, "T_F4")) rc = get_double(value, k, &p->T_F[3]);
-        else if (!strcmp(k, "seg_distance"))
-            rc = get_array(value, k, p->seg_distance, DJL_MAX_SEGMENTS);
-        else if (!strcmp(k, "seg_v_end"))
-            rc = get_array(value, k, p->seg_v_end, DJL_MAX_SEGMENTS);
-        else {
+        for (i = 0; i < DJL_N_PARAMS && !pi; i++)
+            if (!strcmp(k, djl_param_table[i].name)) pi = &djl_param_table[i];
+        if (pi) field = param_field(&e, pi);
+        if (!field) {
             PyErr_Format(PyExc_KeyError, "unknown generator parameter %R", key);
             return -1;
         }
+        if (pi->size > 1)
+            rc = get_array(value, k, (double *)field, pi->size);
+        else if (pi->type == 'R')
+            rc = get_double(value, k, (double *)field);
+        else
+            rc = get_int32(value, k, (int32_t *)field);
         if (rc < 0) return -1;
     }
+    *p = e.p;
+    *t_start = e.t_start;
     return 0;
 }
 
@@ -191,41 +206,14 @@ static PyObject *raise_plan_error(const djl_error *err, djl_status st)
     return NULL;
 }
 
-/* Plan p into plan (the FMU's ensure_plan, without FMI): status, or -1 with a
- * Python error set for the time mapping. */
+/* Plan p into plan and place it on the grid of start_time (the FMU's ensure_plan, without
+ * FMI): the core's status and error. */
 static djl_status plan_into(const djl_params *p, double t_start, double start_time,
                             djl_plan *plan, djl_error *err, double *offset, int *shifted)
 {
     djl_status st = djl_plan_motion(p, plan, err);
-    double off;
     if (st != DJL_OK) return st;
-    if (!isfinite(t_start) || !isfinite(start_time)) {
-        err->status = DJL_E_PARAM;
-        snprintf(err->param, sizeof err->param, "t_start");
-        err->value = t_start;
-        snprintf(err->message, sizeof err->message,
-                 "invalid parameter t_start = %g s: must be finite", t_start);
-        return DJL_E_PARAM;
-    }
-    off = (t_start - start_time) / p->Te;
-    if (!isfinite(off) || fabs(off) > 1e15) {
-        err->status = DJL_E_PARAM;
-        snprintf(err->param, sizeof err->param, "t_start");
-        err->value = t_start;
-        snprintf(err->message, sizeof err->message,
-                 "t_start = %g s is %g samples of Te = %g s away from the start time %g s: too "
-                 "far", t_start, off, p->Te, start_time);
-        return DJL_E_PARAM;
-    }
-    *shifted = 0;
-    if (fabs(off - floor(off + 0.5)) <= 1e-9 * (1.0 + fabs(off)))
-        off = floor(off + 0.5);
-    else {
-        off = ceil(off);
-        *shifted = 1;
-    }
-    *offset = off;
-    return DJL_OK;
+    return djl_start_offset(t_start, start_time, p->Te, offset, shifted, err);
 }
 
 static PyObject *engine_plan(PyObject *self, PyObject *args, PyObject *kwds)
@@ -521,6 +509,22 @@ static PyTypeObject PlanType = {
     .tp_getset = plan_getset,
 };
 
+/* motion_start(t_start, start_time, Te) -> float: the time of the generator sample at which
+ * the motion starts (djl_start_offset), start_time + k Te. */
+static PyObject *engine_motion_start(PyObject *self, PyObject *args)
+{
+    double t_start, start_time, Te, off = 0.0;
+    int shifted = 0;
+    djl_error err;
+    djl_status st;
+    (void)self;
+    if (!PyArg_ParseTuple(args, "ddd", &t_start, &start_time, &Te)) return NULL;
+    memset(&err, 0, sizeof err);
+    st = djl_start_offset(t_start, start_time, Te, &off, &shifted, &err);
+    if (st != DJL_OK) return raise_plan_error(&err, st);
+    return PyFloat_FromDouble(start_time + off * Te);
+}
+
 /* ------------------------------------------------------- Z synchronisation */
 
 typedef struct {
@@ -755,6 +759,10 @@ static PyMethodDef engine_methods[] = {
     {"plan", (PyCFunction)(void (*)(void))engine_plan, METH_VARARGS | METH_KEYWORDS,
      "plan(params, start_time=0.0) -> Plan: plan a move with the generator core; params are FMU "
      "parameter names (the rest at the FMU's start values). Raises PlanError as the FMU refuses."},
+    {"motion_start", engine_motion_start, METH_VARARGS,
+     "motion_start(t_start, start_time, Te) -> float: the first generator sample "
+     "(start_time + k Te) at or after t_start, a t_start within rounding of a sample counting "
+     "as on it: where the FMU starts the motion. Raises PlanError as the FMU refuses t_start."},
     {"sync_velocity", (PyCFunction)(void (*)(void))engine_sync_velocity,
      METH_VARARGS | METH_KEYWORDS,
      "sync_velocity(params, target_time, v_cap, start_time=0.0) -> (v_max, motion_time, synced):"

@@ -17,6 +17,7 @@ import pytest
 from harness._resources import fmu_src_dir
 from harness.fmu.build import fmi_include_dir
 from harness.fmu.codegen import CORE_SOURCES as CORE
+from harness.fmu.codegen import FMU_SOURCES as FMU
 
 C_DIR = Path(__file__).parent / "c"
 SAN = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
@@ -28,11 +29,11 @@ PROGRAMS = {
     "test_core": (["test_core.c"], list(CORE), ["300000", "7"]),
     # 10^5 random corruptions of a serialized FMU state (+10^4 with the checksum
     # recomputed); the full campaign of issue #10 is `test_fmi2 1000000`
-    "test_fmi2": (["test_fmi2.c"], ["fmi2.c", "fmu_model.c", *CORE], ["100000", "10000"]),
-    "test_fmi3": (["test_fmi3.c"], ["fmi3.c", "fmu_model.c", *CORE], []),
+    "test_fmi2": (["test_fmi2.c"], ["fmi2.c", *FMU, *CORE], ["100000", "10000"]),
+    "test_fmi3": (["test_fmi3.c"], ["fmi3.c", *FMU, *CORE], []),
     # communication points and steps (issue #10 items 1-2); the 10^8-step masters run
     # at -O2 in test_time_masters_run_to_the_end
-    "test_time": (["test_time.c"], ["fmi2.c", "fmu_model.c", *CORE], ["200000"]),
+    "test_time": (["test_time.c"], ["fmi2.c", *FMU, *CORE], ["200000"]),
     # fmu_src/djl_math.h against libm, bit for bit: 10^5 random arguments per generator
     # (tests/test_math_nolibm.py runs 2.2*10^5 at -O2)
     "test_math": (["test_math.c"], [], ["100000", "7"]),

@@ -82,3 +82,41 @@ def test_readme_variable_table_is_current(root):
     assert codegen.readme_table() in readme, (
         "README.md: paste the output of `python -c 'from harness.fmu.codegen import "
         "readme_table; print(readme_table())'`")
+
+
+def test_parameter_table_is_the_spec():
+    """djl_vars.h says where every parameter is stored: the FMU and the extension module
+    (harness/_engine.c) read and write parameters through that one table."""
+    header = (fmu_src_dir() / "djl_vars.h").read_text()
+    rows = re.findall(r'\{VR_(\w+), "(\w+)", \'(\w)\', (\d+), (DJL_HOME_\w+), ([^}]*)\}',
+                      header)
+    code = {"Real": "R", "Integer": "I", "Enumeration": "E"}
+    assert [r[1] for r in rows] == [v.name for v in spec.PARAMETERS]
+    for (c_name, name, typ, size, home, offset), var in zip(rows, spec.PARAMETERS):
+        assert var.enum == "VR_" + c_name
+        assert typ == code[var.type] and int(size) == var.size
+        if name in codegen.C_PARAM_HOMES:
+            assert home == codegen.C_PARAM_HOMES[name] and offset == "0"
+        else:
+            field = codegen.C_PARAM_FIELDS.get(name, name)
+            assert home == "DJL_HOME_PARAMS" and offset == f"offsetof(djl_params, {field})"
+    assert f"#define DJL_N_PARAMS {len(spec.PARAMETERS)}" in header
+
+
+def test_enumeration_constants_are_the_spec():
+    header = (fmu_src_dir() / "djl_vars.h").read_text()
+    stems = {"Profile": "PROFILE", "ShortStage": "SHORT_STAGE", "JerkSource": "JERK_SOURCE"}
+    assert set(stems) == set(spec.ENUMERATIONS)
+    for name, items in spec.ENUMERATIONS.items():
+        for item, value, _ in items:
+            assert f"    {stems[name]}_{item.upper()} = {value},\n" in header
+        names = ", ".join(f'"{n}"' for n in [""] + [item for item, _, _ in items])
+        assert f"djl_{stems[name].lower()}_names[] = {{{names}}};" in header
+    # the core's own codes are checked against them at compile time
+    assert "(int)PROFILE_DJL == (int)DJL_PROFILE_DJL" in header
+
+
+def test_profile_codes_are_derived_from_the_enumeration():
+    assert spec.PROFILE_CODES == {"AL": 1, "JL": 2, "DJL": 3}
+    assert spec.PROFILE_CODES == {n: v for n, v, _ in spec.ENUMERATIONS["Profile"]}
+    assert spec.PROFILE_NAMES == {v: n for n, v in spec.PROFILE_CODES.items()}

@@ -2,7 +2,8 @@
 
 Outputs (committed to the repository, checked by ``tests/test_codegen.py``):
 
-- ``fmu_src/djl_vars.h``: value references, instantiation token, model identifier;
+- ``fmu_src/djl_vars.h``: value references, instantiation token, model identifier, the
+  enumeration items, and where each parameter is stored (``djl_param_table``);
 - ``modeldesc/fmi2/modelDescription.xml``;
 - ``modeldesc/fmi3/modelDescription.xml`` and ``modeldesc/fmi3/buildDescription.xml``.
 
@@ -21,9 +22,24 @@ from .spec import VARIABLES, Variable
 # the generator core (map in docs/generator.md): parameter checks, one segment (stages
 # sized, landing solved), a motion of segments, evaluation of samples
 CORE_SOURCES = ("djl_validate.c", "djl_segment.c", "djl_motion.c", "djl_replan.c", "djl_eval.c")
-SOURCES_COMMON = CORE_SOURCES + ("fmu_model.c",)
+# the FMU, independent of the FMI version: the instance (state machine, logging, checks,
+# FMU state) and the model (its variables, planning, DoStep, commands)
+FMU_SOURCES = ("fmu_instance.c", "fmu_model.c")
+SOURCES_COMMON = CORE_SOURCES + FMU_SOURCES
 SOURCES = {2: SOURCES_COMMON + ("fmi2.c",), 3: SOURCES_COMMON + ("fmi3.c",)}
-HEADERS = ("djl_core.h", "djl_internal.h", "djl_math.h", "djl_vars.h", "fmu_model.h")
+HEADERS = ("djl_core.h", "djl_internal.h", "djl_math.h", "djl_vars.h", "fmu_model.h",
+           "fmu_instance.h")
+
+C_PARAM_FIELDS: dict[str, str] = {"T_F1": "T_F[0]", "T_F2": "T_F[1]", "T_F3": "T_F[2]",
+                                  "T_F4": "T_F[3]"}
+"""Field of ``djl_params`` (``djl_core.h``) that stores a parameter, when it is not the
+parameter's own name (``djl_vars.h``'s ``djl_param_table``; the compiler checks the field
+exists and has the parameter's type and size)."""
+
+C_PARAM_HOMES: dict[str, str] = {"t_start": "DJL_HOME_T_START",
+                                 "jerk_source": "DJL_HOME_JERK_SOURCE"}
+"""Parameters the core does not take: stored beside ``djl_params`` by each user of the table
+(the FMU's ``model_data``, the extension module's parameters)."""
 
 DESCRIPTION = (
     "Sampled acceleration-limited (AL), jerk-limited (JL) and dissociated jerk-limited (DJL) "
@@ -93,6 +109,7 @@ def c_header() -> str:
     for i, (name, _) in enumerate(spec.LOG_CATEGORIES):
         lines.append(f"    DJL_LOG_{name.upper()} = {i},")
     lines += [f"    DJL_LOG_N = {len(spec.LOG_CATEGORIES)}", "} djl_log_category;", ""]
+    lines += _c_enumerations()
     lines += [
         "#ifdef DJL_VARS_TABLES",
         "/* Variable table: FMI 2 element value reference = vr + index (arrays). */",
@@ -119,8 +136,103 @@ def c_header() -> str:
     lines.append("static const char *const djl_log_category_names[] = {")
     for name, _ in spec.LOG_CATEGORIES:
         lines.append(f'    "{name}",')
-    lines += ["};", "#endif /* DJL_VARS_TABLES */", "", "#endif /* DJL_VARS_H */", ""]
+    lines += ["};", "#endif /* DJL_VARS_TABLES */", ""]
+    lines += _c_parameter_table()
+    lines += ["#endif /* DJL_VARS_H */", ""]
     return "\n".join(lines)
+
+
+def _c_stem(name: str) -> str:
+    """``ShortStage`` -> ``SHORT_STAGE``."""
+    return "".join("_" + c if c.isupper() and i else c for i, c in enumerate(name)).upper()
+
+
+_CORE_ENUM_PREFIX = {"Profile": "DJL_PROFILE_", "ShortStage": "DJL_SHORT_"}
+"""The core's own constants (``djl_core.h``) for an enumeration's items, when it has them."""
+
+
+def _c_enumerations() -> list[str]:
+    """Enumeration item constants of ``djl_vars.h``: ``<TYPE>_<ITEM> = value``."""
+    lines = ["/* enumeration items (model description types), <TYPE>_<ITEM> = value */"]
+    for name, items in spec.ENUMERATIONS.items():
+        stem = _c_stem(name)
+        lines.append("typedef enum {")
+        for item, value, _ in items:
+            lines.append(f"    {stem}_{item.upper()} = {value},")
+        lines += [f"}} djl_enum_{stem.lower()};", ""]
+    return lines
+
+
+def _c_parameter_table() -> list[str]:
+    """The section of ``djl_vars.h`` that says where each parameter is stored."""
+    ctype = {"Real": ("R", "double"), "Integer": ("I", "int32_t"),
+             "Enumeration": ("E", "int32_t")}
+    rows, checks = [], []
+    for v in spec.PARAMETERS:
+        if v.type not in ctype:
+            raise ValueError(f"{v.name}: no C storage for a {v.type} parameter")
+        code, c_type = ctype[v.type]
+        home = C_PARAM_HOMES.get(v.name)
+        if home is None:
+            field = C_PARAM_FIELDS.get(v.name, v.name)
+            rows.append(f"    {{{v.enum}, \"{v.name}\", '{code}', {v.size}, DJL_HOME_PARAMS, "
+                        f"offsetof(djl_params, {field})}},")
+            checks.append(f"    sizeof(((djl_params *)0)->{field}) == {v.size} * sizeof({c_type})")
+        else:
+            if v.size != 1:
+                raise ValueError(f"{v.name}: an array parameter must be stored in djl_params")
+            rows.append(f"    {{{v.enum}, \"{v.name}\", '{code}', 1, {home}, 0}},")
+    lines = [
+        "#ifdef DJL_VARS_PARAMETERS",
+        "#include <stddef.h>",
+        "#include <stdint.h>",
+        "",
+        '#include "djl_core.h"',
+        "",
+        "/* Where a parameter is stored: a field of djl_params (djl_core.h), or beside it",
+        " * (a parameter the core does not take; each user of the table keeps its own). */",
+        "typedef enum {",
+        "    DJL_HOME_PARAMS = 0,",
+    ]
+    homes = sorted(set(C_PARAM_HOMES.values()))
+    for i, home in enumerate(homes):
+        lines.append(f"    {home} = {i + 1},")
+    lines += [
+        "} djl_param_home;",
+        "",
+        "/* Parameter table: element i of an array at offset + i * sizeof(double). */",
+        "typedef struct {",
+        "    unsigned int vr;",
+        "    const char *name;",
+        "    char type;           /* 'R' double; 'I' Integer and 'E' Enumeration: int32_t */",
+        "    unsigned short size; /* elements */",
+        "    unsigned char home;  /* djl_param_home */",
+        "    size_t offset;       /* DJL_HOME_PARAMS: offset of the field in djl_params */",
+        "} djl_param_info;",
+        "",
+        "static const djl_param_info djl_param_table[] = {",
+        *rows,
+        "};",
+        f"#define DJL_N_PARAMS {len(rows)}",
+        "",
+        "/* Compile-time checks: each field of djl_params has its parameter's type and size, and",
+        " * the enumeration codes are the core's. */",
+        "typedef char djl_param_table_check[(",
+        " &&\n".join(checks),
+        "    ) ? 1 : -1];",
+    ]
+    same = [f"(int){_c_stem(name)}_{item.upper()} == (int){prefix}{item.upper()}"
+            for name, prefix in _CORE_ENUM_PREFIX.items()
+            for item, _, _ in spec.ENUMERATIONS[name]]
+    lines.append("typedef char djl_enum_check[(" + " &&\n    ".join(same) + ") ? 1 : -1];")
+    lines += ["", "/* item names by value (\"\" where no item has the value) */"]
+    for name, items in spec.ENUMERATIONS.items():
+        by_value = {value: item for item, value, _ in items}
+        names = [f'"{by_value.get(i, "")}"' for i in range(max(by_value) + 1)]
+        lines.append(f"static const char *const djl_{_c_stem(name).lower()}_names[] = "
+                     f"{{{', '.join(names)}}};")
+    lines += ["#endif /* DJL_VARS_PARAMETERS */", ""]
+    return lines
 
 
 # --------------------------------------------------------------------------- FMI 2

@@ -809,12 +809,19 @@ def motion_start(t_start: float, start_time: float, Te: float) -> float:
     """First generator sample (``start_time + k Te``) at or after ``t_start``.
 
     The FMU starts the motion there: its sampling grid is anchored at the FMU
-    start time.
+    start time, and a ``t_start`` within rounding of a sample counts as on it.
+    The rule is the generator core's own (``djl_start_offset``, through
+    :func:`harness._engine.motion_start`), the one the FMU applies.
+
+    Raises
+    ------
+    harness._engine.PlanError
+        A ``ValueError``: ``t_start`` not finite, or too far from the start time, as the
+        FMU refuses it.
     """
-    k = (t_start - start_time) / Te
-    kr = round(k)
-    k = kr if abs(k - kr) <= 1e-9 * (1.0 + abs(k)) else math.ceil(k)
-    return start_time + k * Te
+    from .. import _engine  # the compiled core: imported when needed (see harness.engine)
+
+    return _engine.motion_start(float(t_start), float(start_time), float(Te))
 
 
 @dataclass

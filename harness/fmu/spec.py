@@ -93,6 +93,12 @@ ENUMERATIONS: dict[str, tuple[tuple[str, int, str], ...]] = {
 """Enumeration types: items (name, value, description).  FMI 2 sets them with
 ``fmi2SetInteger``, FMI 3 with ``fmi3SetInt64`` (the FMU also takes ``fmi3SetInt32``)."""
 
+PROFILE_CODES: dict[str, int] = {name: value for name, value, _ in ENUMERATIONS["Profile"]}
+"""Code of each profile by name (``{"AL": 1, "JL": 2, "DJL": 3}``), from :data:`ENUMERATIONS`."""
+
+PROFILE_NAMES: dict[int, str] = {value: name for name, value in PROFILE_CODES.items()}
+"""Name of each profile code (the inverse of :data:`PROFILE_CODES`)."""
+
 MAX_POSITION = 1e300
 """Largest |position| a motion may reach (``DJL_MAX_POSITION``): the bound of ``x0`` and
 ``distance``."""

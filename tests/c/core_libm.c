@@ -18,6 +18,8 @@
 #define djl_motion_time libm_djl_motion_time
 #define djl_replan libm_djl_replan
 #define djl_jerk_times_due libm_djl_jerk_times_due
+#define djl_check_t_start libm_djl_check_t_start
+#define djl_start_offset libm_djl_start_offset
 
 #define DJL_INTERNAL static
 

@@ -12,7 +12,7 @@
 #include "check.h"
 #include "djl_vars.h"
 #include "fmi2Functions.h"
-#include "fmu_model.h" /* model_data / model_state_seal: forging states with a valid checksum */
+#include "fmu_instance.h" /* model_data / model_state_seal: forging states with a valid checksum */
 
 static int errors_logged = 0;
 static char last_message[2048];
