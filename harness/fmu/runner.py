@@ -819,7 +819,7 @@ def motion_start(t_start: float, start_time: float, Te: float) -> float:
         A ``ValueError``: ``t_start`` not finite, or too far from the start time, as the
         FMU refuses it.
     """
-    from .. import _engine  # the compiled core: imported when needed (see harness.engine)
+    from .. import _engine  # deferred: the compiled engine is not built in a source checkout
 
     return _engine.motion_start(float(t_start), float(start_time), float(Te))
 

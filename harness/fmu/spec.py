@@ -278,11 +278,6 @@ OUTPUTS = tuple(v for v in VARIABLES if v.causality == "output")
 CALCULATED = tuple(v for v in VARIABLES if v.causality == "calculatedParameter")
 BY_NAME = {v.name: v for v in VARIABLES}
 
-PROFILE_CODES: dict[str, int] = {name: value for name, value, _ in ENUMERATIONS["Profile"]}
-"""Value of the FMU's ``profile`` parameter for each profile name (AL 1, JL 2, DJL 3)."""
-
-PROFILE_NAMES: dict[int, str] = {value: name for name, value in PROFILE_CODES.items()}
-"""Profile name of each value of the ``profile`` parameter."""
 
 
 def fmi2_scalars(var: Variable) -> list[tuple[str, int]]:
