@@ -753,6 +753,100 @@ fail_a:
     return NULL;
 }
 
+/* adjoint_modes(h, f, zeta, gain, n, psi)
+ *   For R independent modes (rows: a mode under one perturbation), each stepped over n steps
+ *   of h with the frequency f[r, k] (Hz) as step_modes does, the sensitivity of the final
+ *   state (eps, deps) to the input of every step: psi[r, k, i, c] = d state_i(n) / d u_c(k),
+ *   u = (a_k, j_k).  The final state of any input from rest is sum_k psi[r, k] u_k: the
+ *   robust tuning evaluates a move under every perturbation with one dot product each.
+ *   f: (R, n); zeta, gain: R values; psi: (R, n, 2, 2) output. */
+static PyObject *engine_adjoint_modes(PyObject *self, PyObject *args)
+{
+    PyObject *of, *oz, *og, *op;
+    double h;
+    Py_ssize_t n, R, r, k;
+    Py_buffer bf, bz, bg, bp;
+    const double *f, *zeta, *gain;
+    double *psi;
+    const double two_pi = DJL_TWO_PI;
+    (void)self;
+    if (!PyArg_ParseTuple(args, "dOOOnO", &h, &of, &oz, &og, &n, &op)) return NULL;
+    if (n < 0 || !(h > 0.0) || !isfinite(h)) {
+        PyErr_SetString(PyExc_ValueError, "n must be >= 0 and h a finite number > 0");
+        return NULL;
+    }
+    if (PyObject_GetBuffer(oz, &bz, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) return NULL;
+    R = bz.len / 8;
+    PyBuffer_Release(&bz);
+    if (get_in_buffer(of, &bf, R * n, "f") < 0) return NULL;
+    if (get_in_buffer(oz, &bz, R, "zeta") < 0) goto fail_f;
+    if (get_in_buffer(og, &bg, R, "gain") < 0) goto fail_z;
+    if (get_out_buffer(op, &bp, R * n * 4, "psi") < 0) goto fail_g;
+    f = bf.buf;
+    zeta = bz.buf;
+    gain = bg.buf;
+    psi = bp.buf;
+    for (r = 0; r < R; r++) {
+        if (!(zeta[r] >= 0.0 && zeta[r] < 1.0)) {
+            PyErr_Format(PyExc_ValueError, "row %zd: damping ratio %g not in [0, 1)", r,
+                         zeta[r]);
+            goto fail_all;
+        }
+    }
+    for (k = 0; k < R * n; k++) {
+        if (!(f[k] > 0.0) || !isfinite(f[k])) {
+            PyErr_Format(PyExc_ValueError, "row %zd: frequency %g Hz at step %zd is not a finite "
+                         "number > 0", k / (n ? n : 1), f[k], k % (n ? n : 1));
+            goto fail_all;
+        }
+    }
+    Py_BEGIN_ALLOW_THREADS
+    for (r = 0; r < R; r++) {
+        /* L = d state(n) / d state(k+1), from the last step back */
+        double L11 = 1.0, L12 = 0.0, L21 = 0.0, L22 = 1.0;
+        double z = zeta[r], g = gain[r];
+        for (k = n - 1; k >= 0; k--) {
+            double omega = two_pi * f[r * n + k];
+            double sig = z * omega, w2 = omega * omega, wd = omega * sqrt(1.0 - z * z);
+            double e = exp(-sig * h), c = cos(wd * h), s = sin(wd * h) / wd;
+            double P11 = e * (c + sig * s), P12 = e * s, P21 = -e * w2 * s;
+            double P22 = e * (c - sig * s);
+            double ka = -g / w2, kj = 2.0 * sig * g / (w2 * w2); /* alpha = ka a + kj j */
+            double G1a = (1.0 - P11) * ka, G1j = (1.0 - P11) * kj + (h - P12) * ka;
+            double G2a = -P21 * ka, G2j = -P21 * kj + (1.0 - P22) * ka;
+            double *out = &psi[(r * n + k) * 4];
+            double N11, N12, N21, N22;
+            out[0] = L11 * G1a + L12 * G2a; /* d eps(n)  / d a_k */
+            out[1] = L11 * G1j + L12 * G2j; /* d eps(n)  / d j_k */
+            out[2] = L21 * G1a + L22 * G2a; /* d deps(n) / d a_k */
+            out[3] = L21 * G1j + L22 * G2j; /* d deps(n) / d j_k */
+            N11 = L11 * P11 + L12 * P21;
+            N12 = L11 * P12 + L12 * P22;
+            N21 = L21 * P11 + L22 * P21;
+            N22 = L21 * P12 + L22 * P22;
+            L11 = N11;
+            L12 = N12;
+            L21 = N21;
+            L22 = N22;
+        }
+    }
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&bp);
+    PyBuffer_Release(&bg);
+    PyBuffer_Release(&bz);
+    PyBuffer_Release(&bf);
+    Py_RETURN_NONE;
+fail_all:
+    PyBuffer_Release(&bp);
+fail_g:
+    PyBuffer_Release(&bg);
+fail_z:
+    PyBuffer_Release(&bz);
+fail_f:
+    PyBuffer_Release(&bf);
+    return NULL;
+}
+
 /* ---------------------------------------------------------------- module */
 
 static PyMethodDef engine_methods[] = {
@@ -770,6 +864,9 @@ static PyMethodDef engine_methods[] = {
     {"step_modes", engine_step_modes, METH_VARARGS,
      "step_modes(a, j, h, f, zeta, gain, n, state, eps, states): advance the modes exactly over "
      "n steps of h with the input a[k] + j[k] tau and the frequencies f[mode, k] (Hz)."},
+    {"adjoint_modes", engine_adjoint_modes, METH_VARARGS,
+     "adjoint_modes(h, f, zeta, gain, n, psi): psi[r, k] = d (eps, deps)(n) / d (a_k, j_k) of "
+     "each row r (a mode, frequencies f[r, k]) stepped as step_modes does."},
     {NULL, NULL, 0, NULL},
 };
 

@@ -15,20 +15,21 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
-from .metrics import NO_BAND, ZERO_BAND_NOTE, residual_peak, rise_time, settling_time
-from .plant import free_amplitude
+from .metrics import NO_BAND, ZERO_BAND_NOTE, residual_peak, rise_time
+from .recommend import recommend as recommend_profile
 from .results import ProfileOutcome, ScenarioResult
 from .robustness import robustness as robustness_curves
 from .scenario import Scenario
-from .simulation.master import CoSimResult, perturbed
+from .scoring import peaks, score_uncertainty, settling_of
+from .simulation.master import CoSimResult
 from .simulation.session import Session
+from .simulation.shaped_axis import ShaperSpec
 from .tuning.rule import TuningResult
 from .tuning.tune import jerk_times, tune_profile
-from .uncertainty import DEFAULT_ERRORS, WORST_ERRORS, WORST_SPAN, UncertaintySet
+from .uncertainty import DEFAULT_ERRORS, WORST_ERRORS, WORST_SPAN
 
 __all__ = ["ROBUSTNESS_MODES", "ProfileMetrics", "peaks", "profile_metrics", "run_case",
            "score_uncertainty"]
@@ -99,30 +100,6 @@ class ProfileMetrics:
     j_peak: float = math.nan
 
 
-def _settling(run: CoSimResult, band: float) -> float:
-    """Settling time of a run into ±band (s), the record extended analytically if needed."""
-    t, err = run.t, run.error
-    # a band made of a residual may equal a sample of |ε| (ζ = 0): a sample at the band
-    # (to rounding) counts as inside
-    band_in = band * (1.0 + 1e-9)
-    amps = [free_amplitude(run.final_state[2 * i], run.final_state[2 * i + 1], m)
-            for i, m in enumerate(run.final_modes)]
-    if sum(amps) <= band_in:
-        return settling_time(t, err, band_in, run.t_start)
-    # time for the envelope Σ A_i e^{-σ_i τ} to fall below the band
-    need = 0.0
-    nm = len(run.final_modes)
-    for Ai, m in zip(amps, run.final_modes, strict=True):
-        if Ai * nm > band_in:
-            need = max(need, math.inf if m.sigma == 0 else math.log(Ai * nm / band_in) / m.sigma)
-    if not (math.isfinite(need) and need < 3600.0):
-        return math.inf
-    te, ee = run.extend(need + run.step)
-    t = np.concatenate((t, te))
-    err = np.concatenate((err, ee + (run.x[-1] - run.target)))
-    return settling_time(t, err, band_in, run.t_start)
-
-
 def profile_metrics(run: CoSimResult, band: float, *,
                     paper_band: float | None = None) -> ProfileMetrics:
     """Metrics of one run, the settling band given.
@@ -150,66 +127,19 @@ def profile_metrics(run: CoSimResult, band: float, *,
         ts_paper, pb = math.nan, math.nan
     else:
         pb = float(paper_band)
-        ts_paper = _settling(run, pb)
+        ts_paper = settling_of(run, pb)
     return ProfileMetrics(
         residual=residual,
         free_amplitude=residual,
         motion_time=run.motion_time,
         rise_time=rise_time(run.t, run.load, run.target, run.t_start, start=run.x0),
-        settling_time=ts_paper if pb == band else _settling(run, band),
+        settling_time=ts_paper if pb == band else settling_of(run, band),
         band=band,
         residual_peak=residual_peak(run.t, run.eps, run.t_end),
         settling_time_paper=ts_paper,
         paper_band=pb,
         **peaks(run),
     )
-
-
-def peaks(run: CoSimResult) -> dict[str, float]:
-    """Largest |v|, |a|, |j| of a run's reference (``j_peak`` inf where ``a`` steps)."""
-    h = run.step
-    a_scale = max(1.0, float(np.max(np.abs(run.a)))) if run.a.size else 1.0
-    steps = run.a.size > 1 and bool(np.any(
-        np.abs(run.a[1:] - (run.a[:-1] + run.j[:-1] * h)) > 1e-9 * a_scale))
-    return {"v_peak": float(np.max(np.abs(run.v))), "a_peak": float(np.max(np.abs(run.a))),
-            "j_peak": math.inf if steps else float(np.max(np.abs(run.j)))}
-
-
-def score_uncertainty(run: CoSimResult, sc: Scenario, band: float,
-                      points: UncertaintySet | None = None) -> dict[str, Any]:
-    """Worst residual and worst settling time of a run over the scenario's uncertainty.
-
-    The reference stays the one planned on the nominal map; the plant is re-run
-    for every perturbation of the scoring set
-    (:func:`harness.simulation.master.perturbed`) and measured in the same band.
-
-    Parameters
-    ----------
-    run : CoSimResult
-        The nominal run (full record).
-    sc : Scenario
-        Its scenario (``sc.uncertainty``, the mode map).
-    band : float
-        The settling band (m), fixed for every point and every profile.
-    points : UncertaintySet, optional
-        Default: ``sc.uncertainty.scoring_set()``.
-
-    Returns
-    -------
-    dict
-        ``residual_worst``, ``settling_time_worst``, ``worst_point``.
-    """
-    uset = sc.uncertainty.scoring_set() if points is None else points
-    pivot = sc.z.z0 + 0.5 * sc.z.distance
-    worst_r, worst_t, where = 0.0, -math.inf, ""
-    for p, r in zip(uset.points, perturbed(run, sc.modemap.scheduled(), uset.points, pivot,
-                                        full=False),
-                    strict=True):
-        worst_r = max(worst_r, r.free_amplitude)
-        ts = _settling(r, band)
-        if ts > worst_t or (math.isnan(ts) and not where):
-            worst_t, where = ts, p.label()
-    return {"residual_worst": worst_r, "settling_time_worst": worst_t, "worst_point": where}
 
 
 def _robustness_mode(robustness: bool | str | None) -> str | None:
@@ -225,7 +155,7 @@ def _robustness_mode(robustness: bool | str | None) -> str | None:
 def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True,
              robustness: bool | str | None = False,
              robustness_session: Session | None = None,
-             uncertainty: bool = True) -> ScenarioResult:
+             uncertainty: bool = True, recommend: bool = False) -> ScenarioResult:
     """Tune, co-simulate and measure every profile of a single-move scenario.
 
     Parameters
@@ -255,6 +185,10 @@ def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True,
         Score every profile over the scenario's uncertainty (its scoring set,
         :func:`score_uncertainty`): worst residual, worst-case settling time in
         the case's band (on by default).
+    recommend : bool
+        Add the profile ``recommended`` (:func:`harness.recommend.recommend`):
+        the robust-tuned member of DJL, JL*shaper, DJL*shaper that settles first
+        in the worst case of the tuning set, at a jerk no higher than JL's.
 
     Returns
     -------
@@ -303,15 +237,45 @@ def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True,
     elif mode == "worst":
         worst = robustness_curves(sc, rs, jerk, errors=WORST_ERRORS).worst(WORST_SPAN)
 
+    rec = None
+    shapers: dict[str, ShaperSpec | None] = {}
+    if recommend:
+        rec = recommend_profile(sc, session, band, jl=tunings.get("JL"))
+        shapers["recommended"] = rec.best.shaper
+        jerk["recommended"] = rec.best.T_F
+        runs["recommended"] = session.run(sc, rec.best.profile, rec.best.T_F,
+                                          shaper=rec.best.shaper)
+        tunings["recommended"] = None
+        worst["recommended"] = float(np.max(session.map_error_residuals(
+            sc, rec.best.profile, rec.best.T_F, WORST_ERRORS, shaper=rec.best.shaper))) \
+            if mode is not None else math.nan
     outcomes = {}
     scoring = sc.uncertainty.scoring_set() if uncertainty else None
     for prof, run in runs.items():
         met = profile_metrics(run, band, paper_band=paper_band)
         if scoring is not None:
             met = dataclasses.replace(met, **score_uncertainty(run, sc, band, scoring))
+        base = rec.best.profile if prof == "recommended" and rec is not None else prof
+        params = session.move_params(sc, base, jerk[prof])
+        shaper = shapers.get(prof)
+        if shaper is not None:
+            params.update(shaper.fmu_parameters(sc.simulation.Te))
         outcomes[prof] = ProfileOutcome(
             prof, run if keep_runs else None, tunings[prof], met, run.T_F, run.z_v_max,
             run.z_synced, plan_info=dict(run.plan_info),
-            worst_residual_10pct=worst.get(prof, math.nan))
+            worst_residual_10pct=worst.get(prof, math.nan),
+            method=(f"{rec.best.family}: {rec.best.label(sc.simulation.Te)}"
+                    if prof == "recommended" and rec is not None
+                    else _method(prof, jerk[prof], sc.simulation.Te)),
+            fmu_parameters=params, z_fmu_parameters=session.z_move_params(sc, run.z_v_max))
     return ScenarioResult(sc, outcomes, band, source, paper_band=paper_band, robustness=curves,
-                          uncertainty=scoring.label if scoring is not None else "")
+                          uncertainty=scoring.label if scoring is not None else "",
+                          recommendation=rec)
+
+
+def _method(profile: str, T_F: tuple[float, ...] | None, Te: float) -> str:
+    """Return a profile in words: ``AL``, ``JL T_F 152 ms``, ``DJL T_F 118/120/142 ms``."""
+    if T_F is None:
+        return profile
+    ms = "/".join(f"{t * 1e3:.0f}" for t in (T_F[:1] if profile.startswith("JL") else T_F))
+    return f"{profile} T_F {ms} ms"

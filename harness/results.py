@@ -15,8 +15,9 @@ DJL never reach v_max, and v_max = 0.5 or 2 m/s plan the same JL and DJL moves.
 
 from __future__ import annotations
 
+import json
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -70,6 +71,11 @@ class ProfileOutcome:
     worst_residual_10pct : float
         Largest residual over a map error within ±10 % (m), jerk times tuned on
         the nominal map (:mod:`harness.robustness`); NaN if not computed.
+    method : str
+        The profile in words (its jerk times, its shaper).
+    fmu_parameters, z_fmu_parameters : dict
+        The generator FMU's start values that reproduce the reference of the
+        excited axis and of the Z axis (the CSV's replayable columns).
     """
 
     name: str
@@ -81,6 +87,9 @@ class ProfileOutcome:
     z_synced: bool
     plan_info: dict[str, Any] = field(default_factory=dict)
     worst_residual_10pct: float = math.nan
+    method: str = ""
+    fmu_parameters: dict[str, Any] = field(default_factory=dict)
+    z_fmu_parameters: dict[str, Any] = field(default_factory=dict)
 
     @property
     def move_key(self) -> tuple[Any, ...] | None:
@@ -90,6 +99,11 @@ class ProfileOutcome:
             return None
         return tuple(tuple(int(n) for n in info[k]) if k == "N_F" else float(info[k])
                      for k in MOVE_KEY_FIELDS)
+
+
+def _json(params: Mapping[str, Any]) -> str:
+    """FMU start values as a JSON object (empty when unknown)."""
+    return json.dumps(dict(params), sort_keys=True) if params else ""
 
 
 def _fmt(v: float, digits: int = 3) -> str:
@@ -130,6 +144,8 @@ class ScenarioResult:
         (``run_case(..., robustness="curves")``).
     uncertainty : str
         The scoring set the worst cases are taken over (empty: not scored).
+    recommendation : Recommendation, optional
+        How the ``recommended`` profile was chosen (:mod:`harness.recommend`).
     """
 
     scenario: Any
@@ -139,6 +155,7 @@ class ScenarioResult:
     paper_band: float = math.nan
     robustness: Any = None
     uncertainty: str = ""
+    recommendation: Any = None
 
     # ------------------------------------------------------------ numbers
 
@@ -253,6 +270,13 @@ class ScenarioResult:
         for p in self.profiles.values():
             if p.name == "AL":
                 continue
+            if p.name == "recommended" and self.recommendation is not None:
+                rec = self.recommendation
+                lines.append(f"  recommended: {p.method} (chosen among "
+                             + ", ".join(f"{c.family} {c.settling_worst:.3g} s"
+                                         for c in rec.candidates)
+                             + f": worst-case settling over the {rec.tuning_set})")
+                continue
             if p.tuning is not None:
                 lines.append(f"  {p.tuning.describe()}")
             else:
@@ -320,6 +344,14 @@ class ScenarioResult:
         if self.has_uncertainty:
             out.append(f"Uncertainty: {self.uncertainty}; the worst cases are over it, every "
                        f"reference planned on the nominal map, the settling band fixed.")
+        if "recommended" in self.profiles:
+            rec = self.profiles["recommended"]
+            others = ", ".join(f"{n} {self.metric(n, 'settling_time_worst'):.3g} s"
+                               for n in self.profiles if n != "recommended")
+            out.insert(0, f"Recommended: {rec.method}; worst-case settling "
+                          f"{rec.metrics.settling_time_worst:.3g} s ({others}), motion time "
+                          f"{rec.metrics.motion_time:.3g} s, nominal residual "
+                          f"{rec.metrics.residual * 1e3:.3g} mm; jerk no higher than JL's.")
         if "DJL" in self.profiles and "JL" in self.profiles:
             ch = self.djl_vs_jl_all()
             parts = [f"residual vibration {_pct(ch['residual'], True)}",
@@ -389,6 +421,10 @@ class ScenarioResult:
                 "a_peak_m_s2": met.a_peak,
                 "j_peak_m_s3": met.j_peak,
                 "jerk_limited": math.isfinite(met.j_peak),
+                "method": p.method,
+                "recommended": n == "recommended",
+                "fmu_parameters": _json(p.fmu_parameters),
+                "z_fmu_parameters": _json(p.z_fmu_parameters),
             })
         return out
 

@@ -765,14 +765,16 @@ def parse_scenario(data: Mapping[str, Any], source: str = "<string>",
     compare = CompareSpec(tuple(profiles), djl_rule, JL_T_F, DJL_T_F, djl_tuning, jl_tuning,
                           map_error, damping, max_motion_time, period_band)
 
-    # [uncertainty]
+    # [uncertainty]; without it, [compare] map_error and damping (their earlier place) give it
     u = _Table(source, "uncertainty", top.raw("uncertainty", {}))
-    u_scale = u.number("map_scale", DEFAULT_UNCERTAINTY.map_scale, nonneg=True,
+    u_scale = u.number("map_scale", map_error, nonneg=True,
                        what="relative error of the whole map, e.g. 0.1")
     u_slope = u.number("map_slope", 0.0, nonneg=True,
                        what="relative error of the map's slope, e.g. 0.3")
     u_shift = u.number("z_shift", 0.0, nonneg=True, what="shift of the map along z in m")
-    u_damp = u.numbers("damping", None, what="damping factor range [lo, hi], e.g. [0.5, 2.0]")
+    u_damp = u.numbers("damping", None if damping is None else
+                       (min(min(damping), 1.0), max(max(damping), 1.0)),
+                       what="damping factor range [lo, hi], e.g. [0.5, 2.0]")
     u.finish()
     if u_damp is not None and len(u_damp) != 2:
         raise u.err("damping", list(u_damp), "must be two factors [lo, hi]")

@@ -41,7 +41,8 @@ def run_scenario(scenario: Scenario | str | Path, *, fmu: str | Path | None = No
                  fmi_version: int | None = None, progress: bool = False,
                  session: Session | None = None, engine: str | None = None,
                  robustness: bool | str | None = "auto", workers: int | None = 1,
-                 scheduler: str | None = None) -> ScenarioResult | SweepResult:
+                 scheduler: str | None = None, recommend: bool | None = None
+                 ) -> ScenarioResult | SweepResult:
     """Run a scenario: one call from a TOML file (or embedded name) to the results.
 
     Parameters
@@ -69,6 +70,9 @@ def run_scenario(scenario: Scenario | str | Path, *, fmu: str | Path | None = No
         None: every core).
     scheduler : str, optional
         Run a sweep's cases on a Dask cluster (its scheduler's address).
+    recommend : bool, optional
+        Add the ``recommended`` profile (:mod:`harness.recommend`); default: for a
+        single move (a sweep's cases take about half a second each to tune).
 
     Returns
     -------
@@ -91,9 +95,10 @@ def run_scenario(scenario: Scenario | str | Path, *, fmu: str | Path | None = No
     try:
         rsession = _robustness_session(sc, session, robustness)
         if not sc.is_sweep:
-            return run_case(sc, session, robustness=robustness, robustness_session=rsession)
+            return run_case(sc, session, robustness=robustness, robustness_session=rsession,
+                            recommend=True if recommend is None else recommend)
         results = [run_case(case, session, keep_runs=False, robustness=robustness,
-                            robustness_session=rsession)
+                            robustness_session=rsession, recommend=bool(recommend))
                    for case in _progress(sc.cases(), progress, desc=sc.name)]
         return SweepResult(sc, results)
     finally:

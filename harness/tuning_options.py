@@ -149,14 +149,20 @@ class TuningOptions:
         Each jerk time stays within [(1 − b)·P_i, (1 + b)·P_i], P_i the modal
         period at the start of stage i (the paper's value); JL's jerk times are
         always allowed (they are the fallback).
+    jerk_limit : {None, "JL"}
+        ``"JL"``: no jerk time shorter than JL's, so that no stage's jerk
+        exceeds JL's (a comparison at the same jerk bound).
     """
 
     map_error: float = 0.1
     damping: tuple[float, ...] | None = None
     max_motion_time: float | str | None = None
     period_band: float = 0.5
+    jerk_limit: str | None = None
 
     def __post_init__(self) -> None:
+        if self.jerk_limit not in (None, "JL"):
+            raise ValueError(f"jerk_limit must be None or 'JL', got {self.jerk_limit!r}")
         check_map_error(self.map_error)
         if self.damping is not None and (not self.damping or not all(
                 math.isfinite(d) and d > 0 for d in self.damping)):

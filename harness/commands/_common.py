@@ -467,7 +467,9 @@ def apply_tuning(scenarios: Sequence[Any], variants: Sequence[str],
                 "JL" not in profiles:
             profiles = ("JL", *profiles)  # the tuned variants are compared with JL
         cmp = dataclasses.replace(cmp, profiles=profiles)
+        unc = sc.uncertainty
         if map_error is not None:
             cmp = dataclasses.replace(cmp, map_error=float(map_error))
-        out.append(dataclasses.replace(sc, compare=cmp))
+            unc = dataclasses.replace(unc, map_scale=float(map_error))
+        out.append(dataclasses.replace(sc, compare=cmp, uncertainty=unc))
     return out

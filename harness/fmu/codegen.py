@@ -152,7 +152,7 @@ _CORE_ENUM_PREFIX = {"Profile": "DJL_PROFILE_", "ShortStage": "DJL_SHORT_"}
 
 
 def _c_enumerations() -> list[str]:
-    """Enumeration item constants of ``djl_vars.h``: ``<TYPE>_<ITEM> = value``."""
+    """Return the enumeration item constants of ``djl_vars.h``: ``<TYPE>_<ITEM> = value``."""
     lines = ["/* enumeration items (model description types), <TYPE>_<ITEM> = value */"]
     for name, items in spec.ENUMERATIONS.items():
         stem = _c_stem(name)
@@ -164,7 +164,7 @@ def _c_enumerations() -> list[str]:
 
 
 def _c_parameter_table() -> list[str]:
-    """The section of ``djl_vars.h`` that says where each parameter is stored."""
+    """Return the section of ``djl_vars.h`` that says where each parameter is stored."""
     ctype = {"Real": ("R", "double"), "Integer": ("I", "int32_t"),
              "Enumeration": ("E", "int32_t")}
     rows, checks = [], []

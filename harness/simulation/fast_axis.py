@@ -72,7 +72,6 @@ class FastAxis:
         self.params: dict[str, Any] = {}
         self.start_time = 0.0
         self._plan: Any = None
-        self._values: dict[str, Any] = dict(_DEFAULTS)
         self._sync_cache: dict[Any, tuple[float, float, bool]] = {}
 
     # ------------------------------------------------------------ planning
@@ -92,7 +91,6 @@ class FastAxis:
             raise PlanError(f"{self.name}: {e}") from None
         self.params = p
         self.start_time = float(start_time)
-        self._values = {**_DEFAULTS, **p}
         return self._plan.motion_time
 
     @property
@@ -109,8 +107,10 @@ class FastAxis:
             if name.startswith("N_F"):
                 return pl.N_F[int(name[3]) - 1]
             return getattr(pl, name)
-        if name in self._values:
-            return self._values[name]
+        if name in self.params:
+            return self.params[name]
+        if name in _DEFAULTS:
+            return _DEFAULTS[name]
         raise KeyError(f"{name!r} is not a parameter or calculated parameter of the generator")
 
     def N_F(self) -> tuple[int, int, int, int]:
@@ -169,7 +169,7 @@ class FastAxis:
         out = self.samples(0, 1, n + 1)
         t = start_time + Te * np.arange(n + 1)
         return MoveSamples(t, out[0], out[1], out[2], out[3], out[6], motion_time, pl.N_F,
-                           float(self._values["t_start"]))
+                           float(self.get("t_start")))
 
     def points(self, n: int, h: float, names: tuple[str, ...] = ("x", "v", "a", "j"), *,
                inputs: InputsHook | None = None, stop: StopHook | None = None

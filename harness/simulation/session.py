@@ -29,11 +29,12 @@ import numpy as np
 from ..fmu import spec
 from ..scenario import Scenario
 from ..tuning_options import split_profile
-from ..uncertainty import check_map_errors
+from ..uncertainty import Perturbation, check_map_errors
 from .axis import Axis, MoveSamples
 from .fast_axis import FastAxis
 from .fmu_axis import FMUAxis
-from .master import CoSimResult, cosimulate, map_error_residuals
+from .master import CoSimResult, cosimulate, map_error_residuals, perturbed
+from .shaped_axis import ShaperSpec, shaped
 
 __all__ = ["ENGINES", "Session", "make_axis"]
 
@@ -172,10 +173,14 @@ class Session:
 
         return plan_fn
 
-    def plan_move(self, sc: Scenario, profile: str, T_F: Sequence[float] | None
-                  ) -> tuple[float, bool]:
+    def excited(self, shaper: ShaperSpec | None = None) -> Axis:
+        """Return the excited axis, shaped by ``shaper`` when given (a shaped axis)."""
+        return shaped(self.axis, shaper)
+
+    def plan_move(self, sc: Scenario, profile: str, T_F: Sequence[float] | None,
+                  shaper: ShaperSpec | None = None) -> tuple[float, bool]:
         """Plan both axes for one profile; return the excited axis' motion time and Z's sync."""
-        T_x = self.axis.plan(self.move_params(sc, profile, T_F))
+        T_x = self.excited(shaper).plan(self.move_params(sc, profile, T_F))
         v_z, synced = self.z_velocity(sc, T_x)
         self.z_axis.plan(self.z_move_params(sc, v_z))
         # planning Z may re-plan nothing of the excited axis: it is a separate instance
@@ -195,7 +200,7 @@ class Session:
         return sc.move.t_start + T_x + sc.simulation.step
 
     def run(self, sc: Scenario, profile: str, T_F: Sequence[float] | None = None,
-            t_stop: float | None = None) -> CoSimResult:
+            t_stop: float | None = None, shaper: ShaperSpec | None = None) -> CoSimResult:
         """Co-simulate one profile of a scenario with the given jerk times.
 
         Parameters
@@ -208,24 +213,27 @@ class Session:
             Jerk times (s); None for AL.
         t_stop : float, optional
             End of the run (s); default ``simulation.t_after`` after both moves.
+        shaper : ShaperSpec, optional
+            Shape the excited axis' output (whole-sample delays).
 
         Returns
         -------
         CoSimResult
         """
-        T_x, synced = self.plan_move(sc, profile, T_F)
+        T_x, synced = self.plan_move(sc, profile, T_F, shaper)
         T_z = float(self.z_axis.get("motion_time"))
         if t_stop is None:
             t_stop = sc.move.t_start + max(T_x, T_z) + sc.simulation.t_after
         h = sc.simulation.step
         t_stop = h * math.ceil(t_stop / h - 1e-9)
-        run = cosimulate(self.axis, self.z_axis, sc.modemap.scheduled(), t_stop, h,
+        run = cosimulate(self.excited(shaper), self.z_axis, sc.modemap.scheduled(), t_stop, h,
                          profile=profile)
         run.z_synced = synced
         return run
 
     def map_error_residuals(self, sc: Scenario, profile: str, T_F: Sequence[float] | None,
-                            errors: Sequence[float] | np.ndarray) -> np.ndarray:
+                            errors: Sequence[float] | np.ndarray,
+                            shaper: ShaperSpec | None = None) -> np.ndarray:
         """Residual of one profile for each map error e (the whole f(z) scaled by 1 + e).
 
         The move and the Z synchronisation are planned once on the nominal
@@ -238,6 +246,24 @@ class Session:
             If an error is not finite or is <= -1 (a frequency <= 0).
         """
         e = check_map_errors(errors)
-        self.plan_move(sc, profile, T_F)
-        return map_error_residuals(self.axis, self.z_axis, sc.modemap.scheduled(), 1.0 + e,
-                                   sc.simulation.step)
+        self.plan_move(sc, profile, T_F, shaper)
+        return map_error_residuals(self.excited(shaper), self.z_axis, sc.modemap.scheduled(),
+                                   1.0 + e, sc.simulation.step)
+
+    def residuals_under(self, sc: Scenario, profile: str, T_F: Sequence[float] | None,
+                        points: Sequence[Perturbation], shaper: ShaperSpec | None = None
+                        ) -> np.ndarray:
+        """Residual (m) of one profile under each perturbation, stepping the plant forward.
+
+        Scale-only points go through :meth:`map_error_residuals` (the plant
+        stepped to the end of the motion, once per point); any other through a
+        run to the end of the motion and :func:`~harness.simulation.master.perturbed`.
+        """
+        pts = list(points)
+        if all(p.is_scale_only for p in pts):
+            return self.map_error_residuals(sc, profile, T_F, [p.scale for p in pts], shaper)
+        run = self.run(sc, profile, T_F, t_stop=self.t_stop_after_motion(sc, profile, T_F),
+                       shaper=shaper)
+        pivot = sc.z.z0 + 0.5 * sc.z.distance
+        return np.array([r.free_amplitude for r in perturbed(run, sc.modemap.scheduled(), pts,
+                                                             pivot, full=False)])

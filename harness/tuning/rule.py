@@ -99,24 +99,16 @@ class TuningResult:
                                                   else self.T_F))
         if self.search is not None:
             r = self.search
-            what = ("worst case over " + _uncertainty(r) if r.method == "robust"
+            what = (f"worst case over the {r.tuned_on}" if r.method == "robust"
                     else "nominal residual")
             return (f"{self.profile} jerk times {ms} ms (method '{self.rule}': minimum "
-                    f"{what}; residual {r.nominal * 1e3:.3g} mm, worst over "
-                    f"{_uncertainty(r)} {r.worst * 1e3:.3g} mm; JL {r.jl_nominal * 1e3:.3g} / "
+                    f"{what}; residual {r.nominal * 1e3:.3g} mm, worst over the "
+                    f"{r.scored_on} {r.worst * 1e3:.3g} mm; JL {r.jl_nominal * 1e3:.3g} / "
                     f"{r.jl_worst * 1e3:.3g} mm; {r.evaluations} evaluations in "
                     f"{r.seconds:.2f} s)")
         state = "converged" if self.converged else "NOT converged"
         return (f"{self.profile} jerk times {ms} ms (rule '{self.rule}', {state} in "
                 f"{self.iterations} plan(s){', middle stages merged' if self.merged else ''})")
-
-
-def _uncertainty(r: Any) -> str:
-    e = (max(r.factors) - 1.0) * 100.0 if r.factors else 0.0
-    txt = f"map error +/-{e:.0f} %"
-    if r.damping and tuple(r.damping) != (1.0,):
-        txt += f", damping x {min(r.damping):g}..{max(r.damping):g}"
-    return txt
 
 
 def _samples(T: float, Te: float) -> int:

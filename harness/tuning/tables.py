@@ -63,7 +63,6 @@ from ..simulation.session import Session
 from ..tuning_options import DJL_METHODS, JL_METHODS
 from ..tuning_options import parse_tuning as parse_pairs
 from ..uncertainty import check_map_error
-from .search import Objective
 from .tune import tune_profile
 
 __all__ = [
@@ -292,7 +291,8 @@ def with_methods(sc: Scenario, djl_method: str = DEFAULT_DJL_METHOD,
     cmp = dataclasses.replace(sc.compare, djl_tuning=djl_method, jl_tuning=jl_method,
                               map_error=e, JL_T_F=None, DJL_T_F=None)
     cmp.tuning_options()  # checks the other options
-    return dataclasses.replace(sc, compare=cmp)
+    return dataclasses.replace(sc, compare=cmp,
+                               uncertainty=dataclasses.replace(sc.uncertainty, map_scale=e))
 
 
 # ---------------------------------------------------------------- one move
@@ -326,24 +326,23 @@ def tune_move(case: Scenario, session: Session, index: int = 0) -> dict[str, Any
     The residuals are computed by :class:`harness.tuning.search.Objective`, the
     function the optimal and robust searches minimise: the free-oscillation
     amplitude when the reference ends, Z moving as in the scenario; the worst
-    case is the largest over the frequency factors 1 + e of
-    :meth:`harness.tuning_options.TuningOptions.factors` and the damping factors.
+    case is the largest over the scoring set of the scenario's uncertainty
+    (:meth:`harness.uncertainty.UncertaintySpec.scoring_set`; the robust method
+    is tuned on the coarser tuning set).
     """
     Te = case.simulation.Te
     jl = tune_profile(session, case, "JL")
     djl = tune_profile(session, case, "DJL")
     if jl is None or djl is None:  # pragma: no cover - with_methods clears imposed ones
         raise ValueError("the scenario imposes jerk times (compare.JL_T_F / DJL_T_F)")
-    opts = case.compare.tuning_options()
-    factors = tuple(float(f) for f in opts.factors())
-    damping = tuple(opts.damping) if opts.damping else (1.0,)
+    scoring = case.uncertainty.scoring_set().points
 
     def measure(profile: str, N: tuple[int, ...]) -> tuple[float, float, float, float]:
-        obj = Objective(case, session, profile)
-        T, r = obj.residuals(N, (1.0,), (1.0,))
-        _, rw = obj.residuals(N, factors, damping)
+        T_F = tuple(n * Te for n in N)
+        rw = session.residuals_under(case, profile, T_F, scoring)  # the nominal map first
+        T, _ = session.plan_move(case, profile, T_F)
         v_z, _ = session.z_velocity(case, T)
-        return float(T), float(r[0, 0]), float(np.max(rw)), float(v_z)
+        return float(T), float(rw[0]), float(np.max(rw)), float(v_z)
 
     N_jl = int(jl.N_F[0])
     N = tuple(int(n) for n in djl.N_F)
@@ -578,16 +577,9 @@ def _run_on(sc: Scenario, kind: str, points: list[Point], total: int, bs: int, e
 
 
 def _uncertainty(sc: Scenario) -> str:
-    opts = sc.compare.tuning_options()
-    n = len(opts.factors())
-    e = opts.map_error
-    txt = (f"the whole mode map f(z) scaled by 1 + e, |e| <= {e:g} ({n} points"
-           f"{', 1 % apart' if n > 1 else ''})" if e > 0 else "none (nominal map only)")
-    if opts.damping:
-        txt += "; every damping ratio x " + ", ".join(f"{d:g}" for d in opts.damping)
-    else:
-        txt += "; nominal damping"
-    return txt
+    u = sc.uncertainty
+    return (f"{u.describe()} (robust tuning: the {len(u.tuning_set())}-point tuning set; the "
+            f"worst_* columns: the {len(u.scoring_set())}-point scoring set)")
 
 
 def _header(sc: Scenario, kind: str, n: int, total: int) -> list[str]:
@@ -626,10 +618,10 @@ def _header(sc: Scenario, kind: str, n: int, total: int) -> list[str]:
         f"jl_method: {cmp.jl_tuning}",
         f"jl_method_meaning: {METHOD_MEANINGS[cmp.jl_tuning]}",
         f"uncertainty: {_uncertainty(sc)}; the worst_* columns are the largest residual "
-        f"over it, for every method",
-        f"map_error: {opts.map_error:g}",
-        "damping_factors: " + (", ".join(f"{d:g}" for d in opts.damping) if opts.damping
-                               else "1"),
+        f"over the scoring set, for every method",
+        f"map_error: {sc.uncertainty.map_scale:g}",
+        "damping_factors: " + (f"{sc.uncertainty.damping[0]:g}..{sc.uncertainty.damping[1]:g}"
+                               if sc.uncertainty.active["damping"] else "1"),
         f"constraints: jerk times within +/-{opts.period_band:g} x the local periods; motion "
         f"time {bound_txt} (optimal, robust)",
         f"djl_rule: {cmp.djl_rule}",

@@ -1,0 +1,195 @@
+"""The profile to use: the one that settles first whatever the real mode map (within reason).
+
+:func:`recommend` tunes each family the project offers, robustly over the
+*tuning* set of the scenario's uncertainty and at a jerk no higher than JL's:
+
+* ``DJL (robust)`` -- DJL's four jerk times (:func:`harness.tuning.search.tune_optimal`,
+  jerk times no shorter than JL's);
+* ``JL*shaper`` -- JL (its jerk time, the modal period at the end of the
+  motion) convolved with a shaper of two or three impulses
+  (:func:`harness.tuning.shaping.robust_shaper`);
+* ``DJL*shaper`` -- the robust DJL convolved with a shaper;
+
+then measures each candidate exactly (the whole record, every point of the
+tuning set, the case's settling band) and recommends the one whose worst-case
+settling time is least (ties: the shorter motion).  Every table reports it on
+the finer *scoring* set, never on the points it was chosen on.
+
+The shaped profiles have whole-sample delays: the generator FMU produces them
+itself (parameters ``shaper = 4``, ``shaper_amplitude[i]``, ``shaper_delay[i]``,
+:meth:`Recommendation.fmu_parameters`), and the harness's
+:class:`~harness.simulation.shaped_axis.ShapedAxis` evaluates the same
+convolution.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+from .scenario import Scenario
+from .scoring import score_uncertainty
+from .simulation.session import Session
+from .simulation.shaped_axis import ShaperSpec
+from .tuning.rule import TuningResult
+from .tuning.search import tune_optimal
+from .tuning.shaping import robust_shaper
+from .tuning.tune import tune_profile
+
+__all__ = ["FAMILIES", "Candidate", "Recommendation", "recommend"]
+
+FAMILIES = ("DJL (robust)", "JL*shaper", "DJL*shaper")
+"""The families the recommendation chooses from."""
+
+
+@dataclass
+class Candidate:
+    """One tuned member of a family, measured exactly.
+
+    Attributes
+    ----------
+    family : str
+        One of :data:`FAMILIES`.
+    profile : {"JL", "DJL"}
+        The generator profile.
+    T_F : tuple of float
+        Its jerk times (s).
+    shaper : ShaperSpec or None
+        The shaper (whole-sample delays), or none.
+    settling_worst : float
+        Worst-case settling time over the tuning set (s, from the start).
+    residual_worst : float
+        Largest residual over the tuning set (m).
+    residual : float
+        Residual on the nominal map (m).
+    motion_time : float
+        The motion time (s).
+    """
+
+    family: str
+    profile: str
+    T_F: tuple[float, ...]
+    shaper: ShaperSpec | None
+    settling_worst: float
+    residual_worst: float
+    residual: float
+    motion_time: float
+
+    def label(self, Te: float) -> str:
+        """Return the method in words: the family, the jerk times, the shaper."""
+        ms = "/".join(f"{t * 1e3:.0f}" for t in (self.T_F[:1] if self.profile == "JL"
+                                                 else self.T_F))
+        txt = f"{self.profile} T_F {ms} ms"
+        if self.shaper is not None:
+            txt += f" * {self.shaper.describe(Te)}"
+        return txt
+
+
+@dataclass
+class Recommendation:
+    """The recommended profile of one move, and the candidates it was chosen from.
+
+    Attributes
+    ----------
+    best : Candidate
+        The recommended one.
+    candidates : list of Candidate
+        Every family's best, measured the same way, best first.
+    band : float
+        The settling band (m).
+    tuning_set : str
+        What the candidates were tuned and chosen on.
+    seconds : float
+        Time to tune and choose.
+    notes : list of str
+        Anything the choice ran into.
+    """
+
+    best: Candidate
+    candidates: list[Candidate]
+    band: float
+    tuning_set: str
+    seconds: float
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def method(self) -> str:
+        """The recommended family."""
+        return self.best.family
+
+    def fmu_parameters(self, sc: Scenario) -> dict[str, Any]:
+        """Return the FMU parameters that produce the recommended profile (excited axis)."""
+        p = Session.move_params(sc, self.best.profile, self.best.T_F)
+        if self.best.shaper is not None:
+            p.update(self.best.shaper.fmu_parameters(sc.simulation.Te))
+        return p
+
+    def fmu_parameters_json(self, sc: Scenario) -> str:
+        """:meth:`fmu_parameters` as a JSON object (what a CSV row carries)."""
+        return json.dumps(self.fmu_parameters(sc), sort_keys=True)
+
+
+def _measure(sc: Scenario, session: Session, family: str, profile: str,
+             T_F: tuple[float, ...], shaper: ShaperSpec | None, band: float) -> Candidate:
+    run = session.run(sc, profile, T_F, shaper=shaper)
+    sco = score_uncertainty(run, sc, band, sc.uncertainty.tuning_set())
+    return Candidate(family, profile, tuple(T_F), shaper, float(sco["settling_time_worst"]),
+                     float(sco["residual_worst"]), run.free_amplitude, run.motion_time)
+
+
+def recommend(sc: Scenario, session: Session, band: float, *,
+              jl: TuningResult | None = None) -> Recommendation:
+    """Tune every family robustly and recommend the one that settles first in the worst case.
+
+    Parameters
+    ----------
+    sc : Scenario
+        A single-move scenario (its ``uncertainty`` gives the tuning set).
+    session : Session
+        Its generator instances (the tuning runs on the fast engine).
+    band : float
+        The settling band (m), the case's.
+    jl : TuningResult, optional
+        JL's tuning, if already done.
+
+    Returns
+    -------
+    Recommendation
+    """
+    t0 = time.perf_counter()
+    fast = session.fast()
+    if jl is None:
+        jl = tune_profile(fast, sc, "JL")
+    if jl is None:
+        raise ValueError(f"{sc.name}: JL's jerk time is imposed; the recommendation tunes it")
+    T_jl = tuple(jl.T_F)
+    notes: list[str] = []
+    cands: list[Candidate] = []
+    # DJL robust, no jerk above JL's
+    scd = dataclasses.replace(sc, compare=dataclasses.replace(
+        sc.compare, djl_tuning="paper", DJL_T_F=None))
+    paper = tune_profile(fast, scd, "DJL")
+    opts = dataclasses.replace(sc.compare.tuning_options(), jerk_limit="JL")
+    djl = tune_optimal(sc, fast, "DJL", "robust", paper, jl, opts)
+    T_djl = tuple(djl.T_F)
+    cands.append(_measure(sc, fast, "DJL (robust)", "DJL", T_djl, None, band))
+    for family, profile, T_F in (("JL*shaper", "JL", T_jl), ("DJL*shaper", "DJL", T_djl)):
+        best: Candidate | None = None
+        for impulses in (2, 3):
+            st = robust_shaper(sc, fast, profile, T_F, band, impulses=impulses)
+            for _, spec in st.candidates[:2]:
+                c = _measure(sc, fast, family, profile, T_F, spec, band)
+                if best is None or (c.settling_worst, c.motion_time) < (best.settling_worst,
+                                                                          best.motion_time):
+                    best = c
+        assert best is not None
+        cands.append(best)
+    cands.sort(key=lambda c: (c.settling_worst if math.isfinite(c.settling_worst) else math.inf,
+                              c.motion_time))
+    return Recommendation(cands[0], cands, band, sc.uncertainty.tuning_set().label,
+                          time.perf_counter() - t0, notes)
+
