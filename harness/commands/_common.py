@@ -28,7 +28,7 @@ from ..files import OutputSet, Terminated, sigterm_raises
 from ..scenario import ScenarioError, load_scenario
 from ..tuning_options import DJL_METHODS, JL_METHODS, variants_of
 from ..tuning_options import parse_tuning as parse_tuning_pairs
-from ..uncertainty import check_map_error
+from ..uncertainty import check_map_error, parse_uncertainty
 
 __all__ = ["CommandError", "add_engine_option", "add_fmu_options", "add_map_error_option",
            "add_out_option", "add_parallel_options", "add_quiet_option", "add_tuning_option",
@@ -129,6 +129,33 @@ def add_map_error_option(p: argparse.ArgumentParser, what: str) -> None:
     p.add_argument("--map-error", type=float, default=None, metavar="E",
                    help=f"{what}: the whole mode map f(z) off by up to +/-E, E in [0, 1) "
                         "(default: the scenario's map_error, 0.1)")
+
+
+def add_uncertainty_option(p: argparse.ArgumentParser) -> None:
+    """Add ``--uncertainty``: how far the real mode map may be off (``[uncertainty]``)."""
+    p.add_argument("--uncertainty", default=None, metavar="SPEC",
+                   help="what the robust tunings and the worst cases cover: comma-separated "
+                        "map_scale=E (the whole map off by +/-E, default 0.1), map_slope=S "
+                        "(its slope off by +/-S), z_shift=M (shifted +/-M metres in z), "
+                        "damping=LO:HI (damping ratios x LO..HI), or 'none'; keys not given "
+                        "keep the scenario's [uncertainty] (docs/harness.md)")
+
+
+def apply_uncertainty(scenarios: Sequence[Any], text: str | None) -> list[Any]:
+    """Set ``--uncertainty`` on every scenario (None: unchanged).
+
+    Raises
+    ------
+    CommandError
+        With status 2 for a malformed or out-of-range value.
+    """
+    if text is None:
+        return list(scenarios)
+    try:
+        return [dataclasses.replace(sc, uncertainty=parse_uncertainty(text, sc.uncertainty))
+                for sc in scenarios]
+    except ValueError as e:
+        raise CommandError(2, f"--uncertainty {text!r}: {e}") from None
 
 
 def add_parallel_options(p: argparse.ArgumentParser, what: str = "moves",

@@ -21,7 +21,9 @@ from ._common import (
     add_out_option,
     add_quiet_option,
     add_scenarios_argument,
+    add_uncertainty_option,
     apply_tuning,
+    apply_uncertainty,
     check_rows_finite,
     check_stems,
     interruptible,
@@ -143,6 +145,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_fmu_options(p)
     add_engine_option(p, "fmu", "fmu")
     add_map_error_option(p, "uncertainty of the robust DJL's tuning")
+    add_uncertainty_option(p)
     add_quiet_option(p)
     p.set_defaults(func=interruptible(run))
 
@@ -168,6 +171,7 @@ def run(args: argparse.Namespace) -> int:
     scenarios, _ = load_scenarios(args.scenarios or ["X", "Y"], args.fmu, args.fmi_version,
                                   args.out)
     scenarios = apply_tuning(scenarios, [], args.map_error)
+    scenarios = apply_uncertainty(scenarios, args.uncertainty)
     sweeps = [s.name for s in scenarios if s.is_sweep]
     if sweeps:
         raise CommandError(2, f"{', '.join(sweeps)}: sweeps are not compared (give "

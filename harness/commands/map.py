@@ -16,7 +16,9 @@ from ._common import (
     add_parallel_options,
     add_quiet_option,
     add_tuning_option,
+    add_uncertainty_option,
     apply_tuning,
+    apply_uncertainty,
     check_parallel_options,
     check_rows_finite,
     interruptible,
@@ -108,6 +110,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_engine_option(p, "fast", "fast")
     add_tuning_option(p, "add")
     add_map_error_option(p, "uncertainty of the 'robust' tuning")
+    add_uncertainty_option(p)
     add_quiet_option(p, "the PNG heat maps")
     p.set_defaults(func=interruptible(run))
 
@@ -122,6 +125,7 @@ def run(args: argparse.Namespace) -> int:
     check_parallel_options(args.workers, args.scheduler, args.max_moves)
     (sc,), (stem,) = load_scenarios([args.scenario], None, None, args.out)
     (sc,) = apply_tuning([sc], parse_tuning(args.tuning), args.map_error)
+    (sc,) = apply_uncertainty([sc], args.uncertainty)
     if sc.map is None:
         raise CommandError(2, f"scenario {sc.name} ({sc.source}) has no [map] table: add one "
                               f"(format: docs/map.md), or use the embedded X or Y")

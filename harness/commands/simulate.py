@@ -23,7 +23,9 @@ from ._common import (
     add_quiet_option,
     add_scenarios_argument,
     add_tuning_option,
+    add_uncertainty_option,
     apply_tuning,
+    apply_uncertainty,
     check_finite,
     interruptible,
     load_scenarios,
@@ -94,6 +96,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_engine_option(p, None, "fmu for single moves, fast for sweeps")
     add_tuning_option(p, "add")
     add_map_error_option(p, "uncertainty of the 'robust' tuning")
+    add_uncertainty_option(p)
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help="with --tuning: run each sweep's cases on N processes (default: every "
                         "core); without it the scenarios already share the cores")
@@ -121,6 +124,7 @@ def run(args: argparse.Namespace) -> int:
                                       args.fmi_version, args.out)
     variants = parse_tuning(args.tuning)
     scenarios = apply_tuning(scenarios, variants, args.map_error)
+    scenarios = apply_uncertainty(scenarios, args.uncertainty)
     if args.workers is not None and args.workers < 1:
         raise CommandError(2, f"--workers {args.workers}: must be >= 1")
 

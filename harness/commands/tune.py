@@ -16,6 +16,8 @@ from ._common import (
     add_parallel_options,
     add_quiet_option,
     add_tuning_option,
+    add_uncertainty_option,
+    apply_uncertainty,
     check_map_error_option,
     check_parallel_options,
     check_rows_finite,
@@ -109,6 +111,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "sweep-Y)")
     add_tuning_option(p, "pick")
     add_map_error_option(p, "uncertainty of the robust method and of the worst-case residuals")
+    add_uncertainty_option(p)
     p.add_argument("--single", action="store_true",
                    help="tune the scenario's own move only, whatever its [map] or [sweep]")
     add_out_option(p, "tune")
@@ -132,6 +135,7 @@ def run(args: argparse.Namespace) -> int:
         raise CommandError(2, f"--tuning {args.tuning}: {e}") from None
     check_map_error_option(args.map_error)
     (sc,), (stem,) = load_scenarios([args.scenario], None, None, args.out)
+    (sc,) = apply_uncertainty([sc], args.uncertainty)
     try:
         sc = with_methods(sc, djl, jl, args.map_error)
     except ValueError as e:

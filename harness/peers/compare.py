@@ -56,6 +56,7 @@ import base64
 import dataclasses
 import html as _html
 import io
+import json
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
@@ -67,8 +68,10 @@ from ..evaluation import profile_metrics, run_case
 from ..files import write_csv
 from ..fmu import spec as fmu_spec
 from ..fmu.runner import generate
+from ..recommend import recommend
 from ..robustness import RobustnessResult
 from ..scenario import Scenario, load_scenario
+from ..scoring import peaks, score_uncertainty
 from ..simulation.master import CoSimResult, cosimulate, map_error_residuals
 from ..simulation.session import Session
 from ..uncertainty import DEFAULT_ERRORS, WORST_SPAN, check_map_errors
@@ -305,6 +308,17 @@ class MethodOutcome:
         Largest residual (m) over the map errors within ±10 % on the
         time-varying plant (the reference planned on the nominal map); NaN
         when not computed.
+    residual_worst, settling_worst : float
+        Largest residual (m) and worst-case settling time (s) over the
+        scenario's uncertainty (its scoring set), in the shared band.
+    worst_point : str
+        Where that settling time is reached.
+    jerk_peak : float
+        Largest |j| of the reference (m/s³); ``inf`` when its acceleration
+        steps (no jerk limit).
+    fmu_parameters : dict
+        The generator FMU's start values that reproduce the reference, when
+        the FMU can produce it (empty otherwise).
     """
 
     name: str
@@ -314,6 +328,11 @@ class MethodOutcome:
     peaks: dict[str, float]
     params: dict[str, Any] = field(default_factory=dict)
     worst_10pct: float = math.nan
+    residual_worst: float = math.nan
+    settling_worst: float = math.nan
+    worst_point: str = ""
+    jerk_peak: float = math.nan
+    fmu_parameters: dict[str, Any] = field(default_factory=dict)
 
 
 STATIONARY_LABEL = "stationary mode at f_end (1 + error)"
@@ -393,6 +412,8 @@ class PeerComparison:
     map_error: Any = None
     notes: list[str] = field(default_factory=list)
     motions: dict[str, Any] = field(default_factory=dict)
+    recommendation: Any = None
+    uncertainty: str = ""
 
     def rows(self) -> list[dict[str, Any]]:
         """One dict per method (the CSV rows)."""
@@ -417,8 +438,27 @@ class PeerComparison:
                 "a_peak_over_a_max": mo.peaks["a"] / max(sc.move.a_max, sc.move.d_max),
                 "j_peak_m_s3": mo.peaks["j"],
                 "f_tuned_Hz": self.f_end, "zeta": self.zeta,
+                # issue 18: the uncertainty, the jerk bound, replayable rows
+                "residual_worst_m": mo.residual_worst,
+                "settling_time_worst_s": mo.settling_worst,
+                "worst_point": mo.worst_point,
+                "uncertainty": self.uncertainty,
+                "jerk_peak_m_s3": mo.jerk_peak,
+                "jerk_over_JL": mo.jerk_peak / self.jerk_jl,
+                "jerk_limited": math.isfinite(mo.jerk_peak),
+                "recommended": n == "recommended",
+                "fmu_parameters": json.dumps(mo.fmu_parameters, sort_keys=True)
+                if mo.fmu_parameters else "",
+                "z_fmu_parameters": json.dumps(
+                    Session.z_move_params(sc, mo.run.z_v_max), sort_keys=True)
+                if mo.fmu_parameters else "",
             })
         return out
+
+    @property
+    def jerk_jl(self) -> float:
+        """JL's jerk (m/s³): a_max / T_F(JL), the bound every jerk-limited method keeps."""
+        return self.scenario.move.a_max / float(self.base.profiles["JL"].T_F[0])
 
     @property
     def map_error_label(self) -> str:
@@ -438,6 +478,7 @@ class PeerComparison:
         res = {n: mo.metrics.residual for n, mo in self.methods.items()}
         st = {n: mo.metrics.settling_time for n, mo in self.methods.items()}
         wc = {n: mo.worst_10pct for n, mo in self.methods.items()}
+        ws = {n: mo.settling_worst for n, mo in self.methods.items()}
 
         def fmt_res(n: str, v: float) -> str:
             return f"{n} {v * 1e3:.3g} mm ({100 * v / al:.2g} % of AL)"
@@ -460,6 +501,9 @@ class PeerComparison:
         if any(math.isfinite(v) for v in wc.values()):
             out.append("  smallest worst case over +/-10 % map error (" + self.map_error_label
                        + "): " + two(_ranking(wc, 1e-9 * al), wc, fmt_res))
+        if any(math.isfinite(v) for v in ws.values()):
+            out.append("  first settled in the worst case (" + self.uncertainty + "): "
+                       + two(_ranking(ws, 1e-9), ws, fmt_t))
         return out
 
     def table(self) -> str:
@@ -476,25 +520,33 @@ class PeerComparison:
                  f"time-optimal JL: {self.T_opt:.4g} s "
                  f"(j_max = a_max / T_F(JL))", ""]
         head = (f"{'method':<16}{'motion [s]':>11}{'/ t.-opt.':>10}{'residual [mm]':>15}"
-                f"{'% of AL':>9}{'settling [s]':>14}{'worst±10% [mm]':>16}{'v/v_max':>9}"
-                f"{'a/a_max':>9}")
+                f"{'% of AL':>9}{'settling [s]':>14}{'worst±10% [mm]':>16}"
+                f"{'worst settle [s]':>18}{'v/v_max':>9}{'a/a_max':>9}{'j/j_JL':>10}")
         lines += [head, "-" * len(head)]
         for r in self.rows():
             st = r["settling_time_s"]
             w = r["worst_residual_10pct_m"]
+            ws = r["settling_time_worst_s"]
+            jj = r["jerk_over_JL"]
             lines.append(
                 f"{r['method']:<16}{r['motion_time_s']:>11.3f}"
                 f"{r['motion_time_over_time_optimal']:>10.3f}"
                 f"{r['residual_m'] * 1e3:>15.4g}{r['residual_pct_of_AL']:>8.1f}%"
                 f"{(f'{st:.3f}' if math.isfinite(st) else 'never'):>14}"
                 f"{(f'{w * 1e3:.4g}' if math.isfinite(w) else '-'):>16}"
-                f"{r['v_peak_over_v_max']:>9.2f}{r['a_peak_over_a_max']:>9.2f}")
+                f"{(f'{ws:.3f}' if math.isfinite(ws) else 'never'):>18}"
+                f"{r['v_peak_over_v_max']:>9.2f}{r['a_peak_over_a_max']:>9.2f}"
+                f"{(f'{jj:.2f}' if math.isfinite(jj) else 'no limit'):>10}")
         lines.append("")
         lines.append(f"Settling band +/-{self.band * 1e3:.3g} mm ({self.band_source}); "
                      "residual: free-oscillation amplitude when the reference ends.")
         if self.map_error is not None:
             lines.append(f"worst±10%: largest residual over map errors e in +/-10 % "
                          f"({self.map_error_label}; each reference planned on the nominal map).")
+        if self.uncertainty:
+            lines.append(f"worst settle: worst-case settling time over the {self.uncertainty} "
+                         f"(never the points a method was tuned on); j/j_JL: largest jerk over "
+                         f"JL's, 'no limit' where the acceleration steps (AL-based).")
         for mo in self.methods.values():
             if mo.name not in BASE:
                 lines.append(f"  {mo.name}: {mo.tuned_to}")
@@ -687,7 +739,8 @@ def _T_F_text(T_F: Sequence[float]) -> str:
 def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str] = PEERS,
                      errors: np.ndarray | None = None, engine: str = "fmu",
                      map_errors: Sequence[float] | np.ndarray | None = MAP_ERRORS,
-                     map_engine: str = "fast", tuned_djl: bool = True) -> PeerComparison:
+                     map_engine: str = "fast", tuned_djl: bool = True,
+                     recommended: bool = True) -> PeerComparison:
     """Run AL / JL / DJL and the peers on one (non-sweep) scenario.
 
     Parameters
@@ -717,6 +770,10 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
         ``sc.compare.djl_tuning`` (the ``JL`` and ``DJL`` rows are then run
         with ``jl_tuning = "end"`` and ``djl_tuning = "paper"`` whatever the
         scenario says: the harness's JL and the paper's DJL).
+    recommended : bool
+        Add the row ``recommended`` (:func:`harness.recommend.recommend`: the
+        robust-tuned member of DJL, JL*shaper and DJL*shaper that settles first
+        in the worst case of the tuning set, at JL's jerk).
 
     Returns
     -------
@@ -778,6 +835,28 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
             methods[n] = MethodOutcome(n, spec.tuned_to, profile_metrics(run, band), run,
                                        st.peaks(), spec.params)
             motions[n] = mot
+        rec = None
+        if recommended:
+            rec = recommend(sc, msession, band, jl=jl.tuning)
+            b = rec.best
+            run = session.run(sc, b.profile, b.T_F, shaper=b.shaper)
+            st = _run_samples(run, "recommended")
+            methods["recommended"] = MethodOutcome(
+                "recommended", f"{b.family}: {b.label(sc.simulation.Te)}",
+                profile_metrics(run, band), run, st.peaks(),
+                {"family": b.family, "T_F": list(b.T_F),
+                 "shaper_amplitude": list(b.shaper.amplitudes) if b.shaper else [],
+                 "shaper_delay_s": list(b.shaper.delays_s(sc.simulation.Te))
+                 if b.shaper else []})
+            motions["recommended"] = st
+        # every method over the scenario's uncertainty (scoring set), in the shared band
+        for n, mo in methods.items():
+            sco = score_uncertainty(mo.run, sc, band)
+            mo.residual_worst = float(sco["residual_worst"])
+            mo.settling_worst = float(sco["settling_time_worst"])
+            mo.worst_point = str(sco["worst_point"])
+            mo.jerk_peak = float(peaks(mo.run)["j_peak"])
+            mo.fmu_parameters = _fmu_parameters(sc, n, mo, base, built, rec)
         map_result = None
         if map_errors is not None:
             e = np.asarray(map_errors, dtype=float).ravel()
@@ -792,6 +871,10 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
             for n, (mot, _) in built.items():
                 T_F[n] = None
                 res[n] = reference_map_error_residuals(sc, msession, mot, e)
+            if rec is not None:
+                T_F["recommended"] = tuple(rec.best.T_F)
+                res["recommended"] = msession.map_error_residuals(
+                    sc, rec.best.profile, rec.best.T_F, e, shaper=rec.best.shaper)
             map_result = RobustnessResult(e, {n: res[n] for n in methods}, sc, T_F)
             if np.any(np.abs(e) <= WORST_SPAN + 1e-12):
                 for n, w in map_result.worst(WORST_SPAN).items():
@@ -809,4 +892,27 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
     err = np.linspace(-0.4, 0.4, 81) if errors is None else np.asarray(errors, dtype=float)
     rc = robustness_curve(motions, f_end, zeta, err, reference="AL")
     return PeerComparison(sc, methods, band, base.band_source, T_opt, f_end, zeta, rc, base,
-                          map_result, notes, motions)
+                          map_result, notes, motions, recommendation=rec,
+                          uncertainty=base.uncertainty)
+
+
+def _fmu_parameters(sc: Any, name: str, mo: MethodOutcome, base: Any, built: dict[str, Any],
+                    rec: Any) -> dict[str, Any]:
+    """Return the FMU start values that produce a method's reference (empty: it cannot)."""
+    if name in base.profiles:
+        return dict(base.profiles[name].fmu_parameters)
+    if name == "recommended" and rec is not None:
+        return rec.fmu_parameters(sc)
+    if name.startswith("DJL (") and "T_F" in mo.params:
+        return Session.move_params(sc, "DJL", mo.params["T_F"])
+    spec = built.get(name, (None, None))[1]
+    if spec is not None and name[:3] in ("AL*", "JL*") and "TV" not in name \
+            and "A" in spec.params and "t" in spec.params:
+        prof = name[:2]
+        T_F = None if prof == "AL" else tuple(base.profiles["JL"].T_F)
+        p = Session.move_params(sc, prof, T_F)
+        p.update({"shaper": 4, "shaper_n": len(spec.params["A"]),
+                  "shaper_amplitude": [float(a) for a in spec.params["A"]],
+                  "shaper_delay": [float(t) for t in spec.params["t"]]})
+        return p
+    return {}
