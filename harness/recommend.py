@@ -7,7 +7,8 @@
   jerk times no shorter than JL's);
 * ``JL*shaper`` -- JL (its jerk time, the modal period at the end of the
   motion) convolved with a shaper of two or three impulses
-  (:func:`harness.tuning.shaping.robust_shaper`);
+  (:func:`harness.tuning.shaping.robust_shaper`), the textbook ZVD and EI of
+  the end mode (delays rounded to samples) measured beside them;
 * ``DJL*shaper`` -- the robust DJL convolved with a shaper;
 
 then measures each candidate exactly (the whole record, every point of the
@@ -25,12 +26,18 @@ convolution.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import json
 import math
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
+from . import __version__
+from .files import write_text
+from .fmu.build import cache_dir
+from .peers.shapers import ei, zvd
 from .scenario import Scenario
 from .scoring import score_uncertainty
 from .simulation.session import Session
@@ -141,8 +148,62 @@ def _measure(sc: Scenario, session: Session, family: str, profile: str,
                      float(sco["residual_worst"]), run.free_amplitude, run.motion_time)
 
 
+def _classic_shapers(sc: Scenario) -> list[ShaperSpec]:
+    """ZVD and EI for the tuned mode at the end of the motion, delays rounded to samples.
+
+    The family's robust search starts from nothing; these textbook designs are
+    measured beside its results, so that the family's best is never worse than
+    them (up to the rounding of their delays).
+    """
+    tm = sc.modemap.tuned
+    f_end, zeta = float(tm.f(sc.z.z0 + sc.z.distance)), float(tm.zeta)
+    Te = sc.simulation.Te
+    out = []
+    for sh in (zvd(f_end, zeta), ei(f_end, zeta)):
+        d = [int(round(t / Te)) for t in sh.t]
+        if len(set(d)) == len(d):
+            A = [float(a) for a in sh.A]
+            rest = [round(a / sum(A), 6) for a in A[1:]]
+            out.append(ShaperSpec((1.0 - sum(rest), *rest), tuple(d), f"{sh.name} (rounded)"))
+    return out
+
+
+_SOURCES = ("recommend.py", "tuning/shaping.py", "tuning/search.py", "tuning/rule.py",
+            "tuning/tune.py", "scoring.py", "uncertainty.py", "simulation/master.py",
+            "simulation/shaped_axis.py", "peers/shapers.py")
+"""The modules whose code a cached recommendation depends on (their digest is in its key)."""
+
+
+def _cache_key(sc: Scenario, band: float) -> str:
+    """Return a recommendation's key: the move, the map, the uncertainty, the band, the code."""
+    root = Path(__file__).resolve().parent
+    h = hashlib.sha256()
+    for name in _SOURCES:
+        h.update((root / name).read_bytes())
+    case = (sc.move, sc.z, sc.modemap, sc.uncertainty, sc.simulation.Te, sc.simulation.step,
+            sc.simulation.short_stage, sc.compare.JL_T_F, sc.compare.jl_tuning,
+            sc.compare.djl_rule, sc.compare.period_band, sc.compare.max_motion_time)
+    h.update(repr((case, float(band).hex(), __version__)).encode())
+    return h.hexdigest()[:32]
+
+
+def _candidate_json(c: Candidate) -> dict[str, Any]:
+    d = dataclasses.asdict(c)
+    d["shaper"] = None if c.shaper is None else dataclasses.asdict(c.shaper)
+    return d
+
+
+def _candidate_of(d: dict[str, Any]) -> Candidate:
+    sh = d["shaper"]
+    spec = None if sh is None else ShaperSpec(tuple(sh["amplitudes"]), tuple(sh["delays"]),
+                                              sh["name"])
+    return Candidate(d["family"], d["profile"], tuple(d["T_F"]), spec,
+                     *(float(d[k]) for k in ("settling_worst", "residual_worst", "residual",
+                                             "motion_time")))
+
+
 def recommend(sc: Scenario, session: Session, band: float, *,
-              jl: TuningResult | None = None) -> Recommendation:
+              jl: TuningResult | None = None, cache: bool = True) -> Recommendation:
     """Tune every family robustly and recommend the one that settles first in the worst case.
 
     Parameters
@@ -155,12 +216,25 @@ def recommend(sc: Scenario, session: Session, band: float, *,
         The settling band (m), the case's.
     jl : TuningResult, optional
         JL's tuning, if already done.
+    cache : bool
+        Keep the result on disk (next to the FMU builds, ``$DJL_FMU_CACHE``),
+        keyed by the move, the map, the uncertainty, the band and the code of
+        the tuning: the same case is not tuned twice.
 
     Returns
     -------
     Recommendation
     """
     t0 = time.perf_counter()
+    path = cache_dir() / "recommend" / f"{_cache_key(sc, band)}.json" if cache else None
+    if path is not None and path.is_file():
+        try:
+            got = json.loads(path.read_text(encoding="utf-8"))
+            cands = [_candidate_of(d) for d in got["candidates"]]
+            return Recommendation(cands[0], cands, band, got["tuning_set"],
+                                  time.perf_counter() - t0, ["from the cache"])
+        except (OSError, ValueError, KeyError, TypeError):
+            pass  # a stale or damaged entry: tuned again, and rewritten
     fast = session.fast()
     if jl is None:
         jl = tune_profile(fast, sc, "JL")
@@ -177,19 +251,29 @@ def recommend(sc: Scenario, session: Session, band: float, *,
     djl = tune_optimal(sc, fast, "DJL", "robust", paper, jl, opts)
     T_djl = tuple(djl.T_F)
     cands.append(_measure(sc, fast, "DJL (robust)", "DJL", T_djl, None, band))
+    classic = _classic_shapers(sc)
     for family, profile, T_F in (("JL*shaper", "JL", T_jl), ("DJL*shaper", "DJL", T_djl)):
         best: Candidate | None = None
+        specs = list(classic)
         for impulses in (2, 3):
             st = robust_shaper(sc, fast, profile, T_F, band, impulses=impulses)
-            for _, spec in st.candidates[:2]:
-                c = _measure(sc, fast, family, profile, T_F, spec, band)
-                if best is None or (c.settling_worst, c.motion_time) < (best.settling_worst,
-                                                                          best.motion_time):
-                    best = c
+            specs += [spec for _, spec in st.candidates[:2]]
+        for spec in specs:
+            c = _measure(sc, fast, family, profile, T_F, spec, band)
+            if best is None or (c.settling_worst, c.motion_time) < (best.settling_worst,
+                                                                      best.motion_time):
+                best = c
         assert best is not None
         cands.append(best)
     cands.sort(key=lambda c: (c.settling_worst if math.isfinite(c.settling_worst) else math.inf,
                               c.motion_time))
-    return Recommendation(cands[0], cands, band, sc.uncertainty.tuning_set().label,
-                          time.perf_counter() - t0, notes)
+    label = sc.uncertainty.tuning_set().label
+    if path is not None:
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            write_text(path, json.dumps({"candidates": [_candidate_json(c) for c in cands],
+                                         "tuning_set": label}, indent=1))
+        except OSError as e:  # a read-only cache: tuned again next time
+            notes.append(f"not cached ({e.strerror or e})")
+    return Recommendation(cands[0], cands, band, label, time.perf_counter() - t0, notes)
 
