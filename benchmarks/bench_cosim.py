@@ -19,8 +19,8 @@ import platform
 import statistics
 import time
 
-from harness.cosim import Session
 from harness.scenario import load_scenario
+from harness.simulation.session import Session
 
 
 def bench(fmi_version: int, repeat: int, t_stop: float, step: float) -> None:

@@ -10,7 +10,7 @@ Prints, in one run on this machine (medians of --repeats runs):
    initialisation, read ``motion_time``) against ``Ruckig.calculate``, and Park et
    al.'s closed forms in Python;
 3. the co-simulation real-time factor (simulated / wall time) of a 10 s run at 1 ms
-   of scenario X: the generator FMU as the excited axis (harness.cosim), and a
+   of scenario X: the generator FMU as the excited axis (harness.simulation), and a
    precomputed time-optimal reference from ruckig (harness.peers.compare).
 
 The ratios FMU / ruckig are printed beside the numbers.
@@ -37,13 +37,13 @@ from _common import (
     stream_rate,
 )
 
-from harness.cosim import Session
 from harness.fmu.build import default_fmu
 from harness.peers.compare import cosimulate_reference
 from harness.peers.park import park_profile
 from harness.peers.ruckig_ref import planner, time_optimal
-from harness.planner import AxisFMU
 from harness.scenario import load_scenario
+from harness.simulation.fmu_axis import FMUAxis
+from harness.simulation.session import Session
 
 TE = 1e-3
 MOVE = {"distance": 0.4, "v_max": 0.5, "a_max": 4.0, "d_max": 4.0}
@@ -82,7 +82,7 @@ def _distances(n: int) -> list[float]:
 
 def fmu_plan(n: int, repeats: int) -> float:
     """Median seconds per re-plan of one FMU instance (distances vary)."""
-    with AxisFMU(default_fmu(2)) as ax:
+    with FMUAxis(default_fmu(2)) as ax:
         base = dict(MOVE, profile=2, T_F1=T_F, Te=TE)
         return seconds_per_call(lambda d: ax.plan(dict(base, distance=d)), _distances(n),
                                 repeats)

@@ -70,7 +70,8 @@ def goal(every: int) -> None:
         first, jl_ok, lost, jerk_lost = 0, 0, [], []
         with Session(engine="fast") as s:
             for case in cases:
-                r = compare_scenario(case, session=s, engine="fast", map_errors=None)
+                r = compare_scenario(case, session=s, engine="fast", map_errors=None,
+                                     bound=False)
                 ws = {n: mo.settling_worst for n, mo in r.methods.items()}
                 rec = ws["recommended"]
                 best = min(ws, key=ws.__getitem__)

@@ -25,10 +25,12 @@ import time
 
 import numpy as np
 
-from harness.cosim import Session, run_scenario
 from harness.evaluation import run_case
 from harness.results import TABLE2_PROFILES
 from harness.scenario import load_scenario
+from harness.simulation.session import Session
+from harness.sweeps import run_scenario
+from harness.tuning.tune import tune_profile
 
 
 def per_sweep(name: str, every: int) -> None:
@@ -42,11 +44,11 @@ def per_sweep(name: str, every: int) -> None:
                 continue
             seen.add(key)
             t0 = time.perf_counter()
-            opt = s.tune(case, "DJL-optimal")
+            opt = tune_profile(s, case, "DJL-optimal")
             t1 = time.perf_counter()
-            rob = s.tune(case, "DJL-robust")
+            rob = tune_profile(s, case, "DJL-robust")
             t2 = time.perf_counter()
-            pap = s.tune(case, "DJL")
+            pap = tune_profile(s, case, "DJL")
             from harness.robustness import WORST_ERRORS, map_error_residuals
 
             wp = float(np.max(map_error_residuals(case, s, "DJL", pap.T_F, WORST_ERRORS)))

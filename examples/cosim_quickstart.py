@@ -17,10 +17,12 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-from harness.cosim import Session, run_scenario  # noqa: E402
 from harness.modemap import ConstantLaw, ModeMap, ModeSpec, TableLaw  # noqa: E402
 from harness.plant import Mode, simulate_mode  # noqa: E402
 from harness.scenario import load_scenario  # noqa: E402
+from harness.simulation.session import Session  # noqa: E402
+from harness.sweeps import run_scenario  # noqa: E402
+from harness.tuning.tune import tune_profile  # noqa: E402
 
 # 1. one call: tune JL and DJL from the mode map, co-simulate, measure
 result = run_scenario("X")
@@ -44,7 +46,7 @@ print(res2.table())
 
 # 3. the pieces
 with Session(fmi_version=2) as s:
-    tuning = s.tune(sc, "DJL")        # iterates plan -> stage starts -> periods
+    tuning = tune_profile(s, sc, "DJL")  # iterates plan -> stage starts -> periods
     print("\n" + tuning.describe())
     print("stage starts [s]:", [round(t, 3) for t in tuning.instants],
           " z there [m]:", [round(z, 3) for z in tuning.z])

@@ -6,13 +6,13 @@ Run:  python examples/jerk_times_vs_periods.py   (writes docs/img/jerk-times-vs-
 For the moves of an embedded sweep (default ``sweep-X``, the paper's test set:
 its cases with d = 0.1, 0.3 and 0.5 m, 25 distinct moves; ``--all``: the 50
 cases, 45 distinct moves) the DJL jerk times are tuned three ways on the fast engine
-(``Session(engine="fast").tune``): ``paper`` (each jerk time = the modal period
+(``tune_profile(Session(engine="fast"), ...)``): ``paper`` (each jerk time = the modal period
 where its stage starts), ``optimal`` (least residual on the nominal map) and
 ``robust`` (least worst residual over a ±10 % map error); see docs/tuning.md.
 The figure puts each stage's jerk time against the local period at its start
 (``TuningResult.periods``): the paper's points sit on the diagonal, the
 optimised ones spread away from it — they do not cancel each stage but make
-the four stage remainders cancel one another (harness.remainder).  A case that
+the four stage remainders cancel one another (harness.tuning.remainder).  A case that
 plans the same move as an earlier one (same paper tuning: stage starts, jerk
 times, Z positions) is tuned once.  The moves are spread over the cores: about
 15 s on 2 idle cores (``--all``: 30 s).
@@ -31,10 +31,11 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-from harness.cosim import Session  # noqa: E402
-from harness.remainder import plot_jerk_times  # noqa: E402
 from harness.scenario import load_scenario  # noqa: E402
-from harness.tuning import TuningResult  # noqa: E402
+from harness.simulation.session import Session  # noqa: E402
+from harness.tuning.remainder import plot_jerk_times  # noqa: E402
+from harness.tuning.rule import TuningResult  # noqa: E402
+from harness.tuning.tune import tune_profile  # noqa: E402
 
 METHODS = ("paper", "optimal", "robust")
 ROOT = Path(__file__).resolve().parents[1]
@@ -49,7 +50,7 @@ def tune_case(args: tuple[str, int]) -> dict[str, TuningResult]:
         for m in METHODS:
             sc = dataclasses.replace(case, compare=dataclasses.replace(case.compare,
                                                                        djl_tuning=m))
-            tu = s.tune(sc, "DJL")
+            tu = tune_profile(s, sc, "DJL")
             assert tu is not None
             out[m] = tu
     return out
@@ -72,7 +73,7 @@ def main(argv: list[str] | None = None) -> None:
         for i, case in enumerate(sc.cases()):
             if not a.all and not any(abs(case.move.distance - d) < 1e-12 for d in keep):
                 continue
-            tu = s.tune(case, "DJL")  # the paper's rule (2 ms): identifies the move
+            tu = tune_profile(s, case, "DJL")  # the paper's rule (2 ms): identifies the move
             assert tu is not None
             key = (tu.N_F, tu.instants, tu.z, case.z.z0)
             if key not in seen:

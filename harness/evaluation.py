@@ -246,9 +246,15 @@ def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True,
         runs["recommended"] = session.run(sc, rec.best.profile, rec.best.T_F,
                                           shaper=rec.best.shaper)
         tunings["recommended"] = None
-        worst["recommended"] = float(np.max(session.map_error_residuals(
-            sc, rec.best.profile, rec.best.T_F, WORST_ERRORS, shaper=rec.best.shaper))) \
-            if mode is not None else math.nan
+        if mode is not None:  # its map-error residuals like the others' (curve or worst case)
+            errs = DEFAULT_ERRORS if curves is not None else WORST_ERRORS
+            res_e = np.asarray(rs.map_error_residuals(
+                sc, rec.best.profile, rec.best.T_F, errs, shaper=rec.best.shaper), float)
+            if curves is not None:
+                curves.residual["recommended"] = res_e
+                curves.T_F["recommended"] = tuple(rec.best.T_F)
+            sel = np.abs(np.asarray(errs)) <= WORST_SPAN + 1e-12
+            worst["recommended"] = float(np.max(res_e[sel]))
     outcomes = {}
     scoring = sc.uncertainty.scoring_set() if uncertainty else None
     for prof, run in runs.items():

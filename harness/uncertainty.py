@@ -18,6 +18,7 @@ are drawn: the *tuning* set the robust methods minimise over, and the finer
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from collections.abc import Callable, Mapping, Sequence
@@ -281,11 +282,11 @@ class UncertaintySpec:
 
     def tuning_set(self) -> UncertaintySet:
         """Return the points the robust methods are tuned on (coarse grids, the corners)."""
-        return self._set(self.TUNING_POINTS, 2, "tuning set")
+        return _drawn(self, "tuning")
 
     def scoring_set(self) -> UncertaintySet:
         """Return the points every method is scored on: finer grids, the box's 3^d grid."""
-        return self._set(self.SCORING_POINTS, 3, "scoring set")
+        return _drawn(self, "scoring")
 
     def describe(self) -> str:
         """Return the ranges in words, e.g. ``map scale +/-10 %, damping x0.5..2``."""
@@ -352,3 +353,11 @@ def parse_uncertainty(text: str | None, base: UncertaintySpec = DEFAULT_UNCERTAI
             raise ValueError(f"{item!r}: {value!r} is not a number"
                              + (" (damping takes LO:HI)" if key == "damping" else "")) from None
     return UncertaintySpec(**values)
+
+
+@functools.lru_cache(maxsize=64)
+def _drawn(spec: UncertaintySpec, which: str) -> UncertaintySet:
+    """Return a spec's tuning or scoring set, drawn once per spec (both are immutable)."""
+    if which == "tuning":
+        return spec._set(spec.TUNING_POINTS, 2, "tuning set")
+    return spec._set(spec.SCORING_POINTS, 3, "scoring set")

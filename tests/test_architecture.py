@@ -31,7 +31,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
     "tuning": ("harness.tuning", "harness.tuning.rule", "harness.tuning.search",
                "harness.tuning.tune", "harness.tuning.tables", "harness.tuning.remainder",
                "harness.tuning.shaping"),
-    "studies": ("harness.results", "harness.robustness", "harness.evaluation",
+    "studies": ("harness.results", "harness.robustness", "harness.evaluation", "harness.bound",
                 "harness.sweeps", "harness.workspace", "harness.online", "harness.report",
                 "harness.recommend", "harness.scoring",
                 "harness.peers", "harness.peers.*", "harness.claims", "harness.claims.*"),

@@ -8,9 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from harness.cosim import Session, run_case
+from harness.evaluation import run_case
 from harness.metrics import SettleBand
 from harness.scenario import load_scenario
+from harness.simulation.session import Session
 
 
 def variant(sc, band: SettleBand | None = None, profiles: tuple[str, ...] | None = None):

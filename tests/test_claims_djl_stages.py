@@ -13,8 +13,9 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from harness.claims import Settings, run_claim
+from harness.claims import Settings
 from harness.claims.djl_stages import filtered_steps, ramp
+from harness.claims.registry import run_claim
 from harness.fmu.runner import generate
 
 

@@ -13,8 +13,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.integrate import quad
 
-from harness.claims import Settings, run_claim
+from harness.claims import Settings
 from harness.claims import formulas as fm
+from harness.claims.registry import run_claim
 from harness.claims.signals import (
     dtft,
     refine_minimum,

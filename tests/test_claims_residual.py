@@ -15,8 +15,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
-from harness.claims import Settings, run_claim
+from harness.claims import Settings
 from harness.claims import formulas as fm
+from harness.claims.registry import run_claim
 from harness.claims.time_varying import frequency_law, phase_only_residual
 
 

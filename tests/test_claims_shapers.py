@@ -16,9 +16,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
-from harness.claims import Settings, run_claim
+from harness.claims import Settings
 from harness.claims import formulas as fm
 from harness.claims import vibration_filters as vf
+from harness.claims.registry import run_claim
 from harness.fmu.runner import generate
 
 

@@ -14,8 +14,9 @@ from hypothesis import strategies as st
 from scipy.integrate import quad
 from scipy.optimize import minimize_scalar
 
-from harness.claims import Settings, run_claim
+from harness.claims import Settings
 from harness.claims import formulas as fm
+from harness.claims.registry import run_claim
 
 
 def _ft(acc, breaks, T, Omega):

@@ -58,7 +58,7 @@ def test_run_writes_table_csv_and_plot(tmp_path, capsys, fmu2):
         assert nominal == [pytest.approx(float(r["residual_m"]), rel=1e-9)]
         worst = max(float(x["residual_m"]) for x in mine if abs(float(x["map_error"])) <= 0.1001)
         assert worst == pytest.approx(float(r["residual_worst_map10_m"]), rel=1e-9)
-    assert [r["profile"] for r in rows] == ["AL", "JL", "DJL"]
+    assert [r["profile"] for r in rows] == ["AL", "JL", "DJL", "recommended"]
     assert float(rows[0]["residual_pct_of_AL"]) == pytest.approx(100.0)
     assert (out / "cli-test.png").read_bytes()[:4] == b"\x89PNG"
     assert "Residual vibration" in (out / "summary.txt").read_text()

@@ -92,7 +92,7 @@ def test_parameter_table_is_the_spec():
                       header)
     code = {"Real": "R", "Integer": "I", "Enumeration": "E"}
     assert [r[1] for r in rows] == [v.name for v in spec.PARAMETERS]
-    for (c_name, name, typ, size, home, offset), var in zip(rows, spec.PARAMETERS):
+    for (c_name, name, typ, size, home, offset), var in zip(rows, spec.PARAMETERS, strict=True):
         assert var.enum == "VR_" + c_name
         assert typ == code[var.type] and int(size) == var.size
         if name in codegen.C_PARAM_HOMES:

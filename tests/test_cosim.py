@@ -12,13 +12,17 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.interpolate import CubicHermiteSpline
 
-from harness.cosim import Session, cosimulate, profile_metrics, run_scenario
+from harness.evaluation import profile_metrics
 from harness.fmu.runner import generate
 from harness.metrics import residual_peak, settling_time
 from harness.modemap import ConstantLaw, ModeMap, ModeSpec
 from harness.plant import Mode, free_amplitude
 from harness.results import ScenarioResult, SweepResult, format_table2
 from harness.scenario import load_scenario
+from harness.simulation.master import cosimulate
+from harness.simulation.session import Session
+from harness.sweeps import run_scenario
+from harness.tuning.tune import tune_profile
 
 
 def short(name: str, t_after: float = 1.0, **sim):
@@ -75,7 +79,7 @@ def test_cosimulated_deflection_matches_solve_ivp(fmu2, name, profile):
     the same time-varying ODE: residual amplitude within 1 % (in fact ~1e-5)."""
     sc = short(name, t_after=0.3)
     with Session(fmu2) as s:
-        tun = s.tune(sc, profile)
+        tun = tune_profile(s, sc, profile)
         run = s.run(sc, profile, tun.T_F if tun else None)
     spec = sc.modemap.tuned
     idx, (eps, deps) = ivp_deflection(run, spec, run.t_end + 0.3)
@@ -136,10 +140,17 @@ def test_step_must_be_a_multiple_of_Te_and_coarser_steps_work(fmu2):
     with Session(fmu2) as s:
         params = Session.move_params(sc, "JL", (0.15,) * 4)
         zp = Session.z_move_params(sc, 0.6)
+
+        def planned_run(t_stop, step):
+            # the master takes planned axes; an FMU axis is re-planned before each run
+            s.axis.plan(params)
+            s.z_axis.plan(zp)
+            return cosimulate(s.axis, s.z_axis, sc.modemap.scheduled(), t_stop, step)
+
         with pytest.raises(ValueError, match="multiple"):
-            cosimulate(s.axis, s.z_axis, params, zp, sc.modemap.scheduled(), 1.0, 0.0015)
-        fine = cosimulate(s.axis, s.z_axis, params, zp, sc.modemap.scheduled(), 1.6, 0.001)
-        coarse = cosimulate(s.axis, s.z_axis, params, zp, sc.modemap.scheduled(), 1.6, 0.004)
+            planned_run(1.0, 0.0015)
+        fine = planned_run(1.6, 0.001)
+        coarse = planned_run(1.6, 0.004)
     assert coarse.t[1] == pytest.approx(0.004)
     # first-order hold between communication points: close to the exact 1 ms result
     np.testing.assert_allclose(coarse.eps, fine.eps[::4], atol=2e-3 * np.max(np.abs(fine.eps)))
@@ -190,7 +201,8 @@ def _check_settling(run, band: float, ts: float) -> None:
 
 def test_run_scenario_is_one_call_and_its_metrics_are_right(tmp_path, fmu2):
     res = run_scenario(short("X", t_after=2.0), fmu=fmu2)
-    assert list(res.profiles) == ["AL", "JL", "DJL"]
+    # a single move also gets the profile that settles first under uncertainty
+    assert list(res.profiles) == ["AL", "JL", "DJL", "recommended"]
     spec = res.scenario.modemap.tuned
     amp = {n: _amplitude_from_samples(p.run, spec) for n, p in res.profiles.items()}
     for n, p in res.profiles.items():
@@ -232,7 +244,7 @@ def test_run_scenario_is_one_call_and_its_metrics_are_right(tmp_path, fmu2):
         assert p.worst_residual_10pct >= p.metrics.residual
     path = res.to_csv(tmp_path / "x.csv")
     lines = path.read_text().splitlines()
-    assert len(lines) == 4 and lines[0].startswith("scenario,profile")
+    assert len(lines) == 5 and lines[0].startswith("scenario,profile")
     import csv
 
     rows = list(csv.DictReader(path.open()))
@@ -310,3 +322,22 @@ def test_small_sweep_and_table2(fmu2, tmp_path):
     assert "Mean value" in format_table2([res])
     assert len(res.to_csv(tmp_path / "sw.csv").read_text().splitlines()) == 1 + 2 * 3
     plt.close(res.plot())
+
+
+def test_fmu_axis_points_always_start_from_the_planned_move(fmu2):
+    """A second points() on an already stepped FMU axis replays the move from its start (an
+    FMU only steps forward: without the re-plan the second run would silently be shifted)."""
+    from harness.simulation.fmu_axis import FMUAxis
+
+    params = {"profile": 2, "distance": 0.1, "v_max": 0.5, "a_max": 4.0, "T_F1": 0.05}
+    with FMUAxis(fmu2) as ax:
+        ax.plan(params)
+        a = ax.points(300, 1e-3)
+        b = ax.points(300, 1e-3)
+        s = ax.sample(params)
+        c = ax.points(300, 1e-3)
+    for name in ("x", "v", "a", "j"):
+        np.testing.assert_array_equal(a.values[name], b.values[name])
+        np.testing.assert_array_equal(a.values[name], c.values[name])
+    np.testing.assert_array_equal(a.t, b.t)
+    assert a.values["x"][-1] > 0.09 and s.x[-1] == pytest.approx(0.1, abs=1e-12)

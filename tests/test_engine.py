@@ -1,4 +1,5 @@
-"""The fast engine (harness._engine + harness.engine) against the FMU engine and the Python plant.
+"""The fast engine (harness._engine + harness.simulation.fast_axis) against the FMU engine and
+the Python plant.
 
 The fast engine must be the same computation as the reference one, not an
 approximation of it: the generator outputs equal the FMU's, its refusals carry
@@ -26,13 +27,15 @@ from test_generator_invariants import multi_moves, single_moves
 
 from harness import _engine
 from harness._resources import fmu_src_dir
-from harness.cosim import Session
-from harness.engine import FastAxis, PlanError, cosimulate_fast, map_error_residuals
 from harness.fmu.codegen import CORE_SOURCES
 from harness.fmu.runner import FMUError, GeneratorFMU
-from harness.planner import AxisFMU, sync_z_velocity
 from harness.plant import step_mode_jerk
 from harness.scenario import load_scenario
+from harness.simulation.fast_axis import FastAxis, PlanError
+from harness.simulation.fmu_axis import FMUAxis
+from harness.simulation.master import cosimulate, map_error_residuals
+from harness.simulation.session import Session
+from harness.tuning.tune import tune_profile
 
 CORE = [str(fmu_src_dir() / f) for f in CORE_SOURCES]
 
@@ -147,9 +150,9 @@ def test_sample_into_checks_its_buffer():
 def test_z_synchronisation_equals_the_python_bisection(fmu2, dz, v_cap, target):
     base = {"profile": 2, "distance": dz, "a_max": 8.0, "d_max": 8.0, "T_F1": 0.04,
             "T_F2": 0.04, "T_F3": 0.04, "T_F4": 0.04, "short_stage": 2}
-    with AxisFMU(fmu2) as ax:
-        ref = sync_z_velocity(ax, base, target, v_cap)
-    got = sync_z_velocity(FastAxis(), base, target, v_cap)
+    with FMUAxis(fmu2) as ax:
+        ref = ax.sync_velocity(base, target, v_cap)
+    got = FastAxis().sync_velocity(base, target, v_cap)
     assert got == ref
 
 
@@ -224,13 +227,14 @@ def test_plan_residuals_equal_stepping_the_samples():
 def test_map_error_residuals_equal_runs_on_the_scaled_map():
     sc = load_scenario("X")
     with Session(engine="fast") as s:
-        tun = s.tune(sc, "DJL")
+        tun = tune_profile(s, sc, "DJL")
         params = s.move_params(sc, "DJL", tun.T_F)
         T = s.axis.plan(params)
         v, _ = s.z_velocity(sc, T)
         zp = s.z_move_params(sc, v)
+        s.z_axis.plan(zp)  # the master takes the two axes planned
         errors = [-0.1, 0.0, 0.05]
-        got = map_error_residuals(s.axis, s.z_axis, params, zp, sc.modemap.scheduled(),
+        got = map_error_residuals(s.axis, s.z_axis, sc.modemap.scheduled(),
                                   [1 + e for e in errors])
         for e, r in zip(errors, got, strict=True):
             scaled = dataclasses.replace(sc, modemap=sc.modemap.scaled(1 + e))
@@ -244,7 +248,7 @@ def test_map_error_residuals_equal_runs_on_the_scaled_map():
 def test_scenario_runs_equal_through_both_engines(fmu2, name, profile):
     sc = load_scenario(name)
     with Session(fmu2) as ref, Session(engine="fast") as fast:
-        tr, tf = ref.tune(sc, profile), fast.tune(sc, profile)
+        tr, tf = tune_profile(ref, sc, profile), tune_profile(fast, sc, profile)
         assert (tr is None) == (tf is None)
         T_F = tr.T_F if tr else None
         if tr:
@@ -259,10 +263,12 @@ def test_scenario_runs_equal_through_both_engines(fmu2, name, profile):
     assert b.final_state == pytest.approx(a.final_state, rel=1e-12, abs=1e-18)
 
 
-def test_cosimulate_fast_refuses_a_step_off_the_grid():
+def test_cosimulate_on_fast_axes_refuses_a_step_off_the_grid():
     ax, az = FastAxis(), FastAxis()
+    ax.plan({"distance": 0.1})
+    az.plan({"distance": 0.0})
     with pytest.raises(ValueError, match="whole multiple"):
-        cosimulate_fast(ax, az, {"distance": 0.1}, {"distance": 0.0}, [], 1.0, 1.5e-3)
+        cosimulate(ax, az, [], 1.0, 1.5e-3)
 
 
 def test_engine_source_is_clean_under_strict_c99(tmp_path):

@@ -309,7 +309,7 @@ def test_generator_fmu_never_leaves_its_copy(tmp_path, bad_fmus, monkeypatch):
 def test_nan_metric_is_a_failure(tmp_path, capsys, monkeypatch):
     import math
 
-    import harness.cosim
+    import harness.commands.simulate
 
     class Fake:
         def rows(self):
@@ -319,7 +319,7 @@ def test_nan_metric_is_a_failure(tmp_path, capsys, monkeypatch):
         def table(self):
             return ""
 
-    monkeypatch.setattr(harness.cosim, "run_scenario", lambda *a, **k: Fake())
+    monkeypatch.setattr(harness.commands.simulate, "run_scenario", lambda *a, **k: Fake())
     out = tmp_path / "out"
     assert main(["simulate", str(_write(tmp_path, BASE)), "-o", str(out), "--no-plot"]) == 1
     err = capsys.readouterr().err
@@ -387,20 +387,21 @@ def test_nan_metric_in_compare_is_a_failure(tmp_path, capsys, monkeypatch):
     import dataclasses
     import math
 
-    import harness.cosim
+    import harness.peers.compare
     from harness.peers.ruckig_ref import ruckig_available
 
     if not ruckig_available():
         pytest.skip("compare needs ruckig")
-    real = harness.cosim.profile_metrics
+    real = harness.peers.compare.profile_metrics
 
     def nan_residual(*a, **k):  # the peers' metrics
         return dataclasses.replace(real(*a, **k), residual=math.nan)
 
-    monkeypatch.setattr(harness.cosim, "profile_metrics", nan_residual)
+    monkeypatch.setattr(harness.peers.compare, "profile_metrics", nan_residual)
     out = tmp_path / "out"
     err = _nan_run(["compare", "X", "--peers", "AL*ZV", "--no-tuned-djl", "--timeopt", "0",
-                    "--no-stationary", "--no-plot", "-q", "-o", str(out)], out, capsys)
+                    "--no-stationary", "--no-bound", "--no-plot", "-q", "-o", str(out)], out,
+                   capsys)
     assert "X.csv: residual_m = nan" in err and "method = AL*ZV" in err
 
 
@@ -426,7 +427,8 @@ def test_nan_in_compare_curves_and_timeopt_is_a_failure(tmp_path, capsys, monkey
     monkeypatch.setattr(pc, "robustness_curve", nan_curve)
     out = tmp_path / "out"
     err = _nan_run(["compare", "X", "--peers", "AL*ZV", "--no-tuned-djl", "--timeopt", "0",
-                    "--no-stationary", "--no-plot", "-q", "-o", str(out)], out, capsys)
+                    "--no-stationary", "--no-bound", "--no-plot", "-q", "-o", str(out)], out,
+                   capsys)
     assert "X-robustness.csv: residual_m = nan" in err and "frequency_error = 0.0" in err
 
 
@@ -434,15 +436,14 @@ def test_nan_residual_in_tune_is_a_failure(tmp_path, capsys, monkeypatch):
     import math
 
     pytest.importorskip("harness._engine")
-    import harness.optimize
+    from harness.simulation.session import Session
 
-    real = harness.optimize.Objective.residuals
+    real = Session.residuals_under  # what harness.tuning.tables.tune_move measures with
 
     def nan_residuals(self, *a, **k):
-        T, r = real(self, *a, **k)
-        return T, r * math.nan
+        return real(self, *a, **k) * math.nan
 
-    monkeypatch.setattr(harness.optimize.Objective, "residuals", nan_residuals)
+    monkeypatch.setattr(Session, "residuals_under", nan_residuals)
     out = tmp_path / "out"
     err = _nan_run(["tune", str(_write(tmp_path, BASE)), "--single", "--tuning", "paper",
                     "-q", "-o", str(out)], out, capsys)
@@ -485,7 +486,8 @@ def test_a_whole_float_for_an_integer_key_is_refused(tmp_path, capsys, text, key
 
 @pytest.mark.parametrize("value", [3.0, 2.5, True, "3"])
 def test_python_api_fmi_version_must_be_an_int(value):
-    from harness.cosim import Session, run_scenario
+    from harness.simulation.session import Session
+    from harness.sweeps import run_scenario
 
     sc = load_scenario("X")
     with pytest.raises(ScenarioError, match=r"simulation\.fmi_version = .*must be the integer"):

@@ -77,9 +77,9 @@ def _assert_rows_identical(rows_a, rows_b) -> None:
 @pytest.fixture(scope="module")
 def serial():
     """The small map run in this process (the reference of the parallel runs)."""
-    from harness.workspace import run_map
+    from harness.workspace import run_workspace_map
 
-    return run_map(_scenario(), engine=ENGINE, workers=1)
+    return run_workspace_map(_scenario(), engine=ENGINE, workers=1)
 
 
 # ------------------------------------------------------------------ the grid
@@ -232,8 +232,9 @@ def test_unreachable_scheduler_is_a_clear_error():
 
 
 def test_serial_map_rows_are_the_sweep_rows_of_each_move(serial):
-    from harness.cosim import Session, run_case
+    from harness.evaluation import run_case
     from harness.results import SweepResult
+    from harness.simulation.session import Session
 
     sc = _scenario()
     assert serial.n_moves == 16 and serial.workers == 1
@@ -270,25 +271,25 @@ def test_moves_are_different(serial):
 
 
 def test_identical_on_a_process_pool(serial, tmp_path):
-    from harness.workspace import run_map
+    from harness.workspace import run_workspace_map
 
     sc = _scenario()
     with ProcessPoolExecutor(2) as ex:
-        pool = run_map(sc, engine=ENGINE, executor=ex, batch=3)
+        pool = run_workspace_map(sc, engine=ENGINE, executor=ex, batch=3)
     assert pool.batch == 3 and pool.executor == "local process pool"
     _assert_rows_identical(pool.rows(), serial.rows())
     a, b = serial.to_csv(tmp_path / "a.csv"), pool.to_csv(tmp_path / "b.csv")
     assert a.read_bytes() == b.read_bytes()
-    # run_map's own pool, with another batch size and worker count
-    own = run_map(sc, engine=ENGINE, workers=2, batch=5, max_moves=9)
+    # run_workspace_map's own pool, with another batch size and worker count
+    own = run_workspace_map(sc, engine=ENGINE, workers=2, batch=5, max_moves=9)
     assert own.workers == 2
     _assert_rows_identical(own.rows(), serial.rows()[:27])
 
 
 def test_max_moves_runs_the_first_moves(serial):
-    from harness.workspace import run_map
+    from harness.workspace import run_workspace_map
 
-    part = run_map(_scenario(), engine=ENGINE, workers=1, max_moves=5)
+    part = run_workspace_map(_scenario(), engine=ENGINE, workers=1, max_moves=5)
     assert part.n_moves == 5 and part.points == _scenario().map_points()[:5]
     _assert_rows_identical(part.rows(), serial.rows()[:15])
     g = part.grid("residual_m", "AL")
@@ -299,11 +300,11 @@ def test_max_moves_runs_the_first_moves(serial):
 def test_identical_on_a_dask_local_cluster(serial):
     from distributed import LocalCluster
 
-    from harness.workspace import run_map
+    from harness.workspace import run_workspace_map
 
     with LocalCluster(n_workers=2, processes=True, threads_per_worker=1, host="127.0.0.1",
                       dashboard_address=None) as cluster:
-        res = run_map(_scenario(), engine=ENGINE, scheduler=cluster.scheduler_address,
+        res = run_workspace_map(_scenario(), engine=ENGINE, scheduler=cluster.scheduler_address,
                       batch=2)
     assert res.executor.startswith("Dask cluster tcp://127.0.0.1:")
     assert res.workers == 2
@@ -312,28 +313,28 @@ def test_identical_on_a_dask_local_cluster(serial):
 
 
 def test_map_needs_a_map_table_and_a_known_engine():
-    from harness.workspace import run_map
+    from harness.workspace import run_workspace_map
 
     with pytest.raises(ScenarioError, match=r"no \[map\] table"):
-        run_map(_scenario(_with_map("")), engine=ENGINE, workers=1)
+        run_workspace_map(_scenario(_with_map("")), engine=ENGINE, workers=1)
     with pytest.raises(ValueError, match="unknown engine"):
-        run_map(_scenario(), engine="warp", workers=1)
+        run_workspace_map(_scenario(), engine="warp", workers=1)
 
 
 def test_failing_move_is_named(monkeypatch):
-    import harness.evaluation
-    from harness.workspace import MapError, run_map
+    import harness.workspace
+    from harness.workspace import WorkspaceMapError, run_workspace_map
 
-    real = harness.evaluation.run_case
+    real = harness.workspace.run_case
 
     def flaky(case, session, **kw):
         if case.move.distance < 0 and case.z.z0 > 0:
             raise ValueError("planner refused")
         return real(case, session, **kw)
 
-    monkeypatch.setattr(harness.evaluation, "run_case", flaky)
-    with pytest.raises(MapError) as ei:
-        run_map(_scenario(), engine=ENGINE, workers=1)
+    monkeypatch.setattr(harness.workspace, "run_case", flaky)
+    with pytest.raises(WorkspaceMapError) as ei:
+        run_workspace_map(_scenario(), engine=ENGINE, workers=1)
     assert "move 10 " in str(ei.value) and "distance = -0.25 m" in str(ei.value)
     assert "planner refused" in str(ei.value)
 
@@ -423,12 +424,12 @@ def test_cli_argparse_refusals(capsys):
 
 
 def test_cli_failing_move_exit_1_and_writes_nothing(tmp_path, capsys, monkeypatch):
-    import harness.evaluation
+    import harness.workspace
 
     def broken(case, session, **kw):
         raise ValueError("no plan")
 
-    monkeypatch.setattr(harness.evaluation, "run_case", broken)
+    monkeypatch.setattr(harness.workspace, "run_case", broken)
     scen = tmp_path / "s.toml"
     scen.write_text(SCENARIO)
     out = tmp_path / "out"
@@ -474,10 +475,10 @@ def test_duplicate_moves_are_marked_and_counted_once():
     """v_max = 2 and 3 m/s are never reached on a 0.05 m move: JL and DJL plan the same moves,
     so the second is marked a duplicate of the first and counted once; 0.3 m/s is reached on
     a 0.4 m move, so that move differs from the 0.4 m move at 2 m/s."""
-    from harness.workspace import run_map
+    from harness.workspace import run_workspace_map
 
     sc = _scenario(_with_map("[map]\ndistance = [0.05, 0.4]\nv_max = [2.0, 3.0, 0.3]\n"))
-    res = run_map(sc, engine=ENGINE, workers=1)
+    res = run_workspace_map(sc, engine=ENGINE, workers=1)
     dup = [rows[0]["duplicate_of"] for rows in res.move_rows]
     names = [rows[0]["scenario"] for rows in res.move_rows]
 

@@ -212,8 +212,8 @@ def test_sampled_peak_is_up_to_8_percent_below_the_amplitude_depending_on_the_ph
 
 def _hand_run(f: float, zeta: float, a0: float, T: float, t_after: float):
     """A CoSimResult built by hand from solve_ivp (constant mode, bang-bang move)."""
-    from harness.cosim import CoSimResult
     from harness.plant import Mode
+    from harness.simulation.master import CoSimResult
 
     acc, kinks = _pulse(a0, T)
     t, eps, state, free = _single_mode_response(f, zeta, acc, kinks, 2 * T, t_after)

@@ -3,7 +3,7 @@
 An interruption (Ctrl-C, SIGTERM, an exception) while the files are written or while they
 are swapped in leaves the previous files byte for byte and no staging folder; a process
 killed during the swap (SIGKILL) is rolled back by the next run; a successful run replaces
-every file of its set.  See harness.commands._outputs.
+every file of its set.  See harness.files.
 """
 
 from __future__ import annotations
@@ -17,9 +17,9 @@ from pathlib import Path
 
 import pytest
 
+from harness import files
 from harness.cli import main
-from harness.commands import _outputs
-from harness.commands._outputs import TMP_PREFIX, OutputSet, recover_stale
+from harness.files import TMP_PREFIX, OutputSet, recover_stale
 
 from _scenarios import SMALL_AXIS
 
@@ -69,7 +69,7 @@ def _interrupt_path(monkeypatch: pytest.MonkeyPatch, n: int,
 def _interrupt_swap(monkeypatch: pytest.MonkeyPatch, n: int, after: bool = False,
                     exc: type[BaseException] = KeyboardInterrupt) -> None:
     """Raise ``exc`` at the n-th file of the swap: before it is swapped, or just after."""
-    orig = _outputs._swap_one
+    orig = files._swap_one
     calls: list[str] = []
 
     def swap(base: Path, tmp: Path, name: str, created: list[Path]) -> None:
@@ -80,7 +80,7 @@ def _interrupt_swap(monkeypatch: pytest.MonkeyPatch, n: int, after: bool = False
         if len(calls) == n and after:
             raise exc("interrupted after a swap")
 
-    monkeypatch.setattr(_outputs, "_swap_one", swap)
+    monkeypatch.setattr(files, "_swap_one", swap)
 
 
 # ------------------------------------------------------------------ the mechanism
@@ -153,13 +153,13 @@ def test_signals_during_the_swap_are_delivered_after_it(tmp_path, monkeypatch):
     KeyboardInterrupt comes."""
     out = tmp_path / "out"
     _seed(out, NAMES)
-    orig = _outputs._swap_one
+    orig = files._swap_one
 
     def swap(*a: object) -> None:
         os.kill(os.getpid(), signal.SIGINT)
         orig(*a)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(_outputs, "_swap_one", swap)
+    monkeypatch.setattr(files, "_swap_one", swap)
     with pytest.raises(KeyboardInterrupt), OutputSet(out) as o:
         _write_new(o)
         o.commit()
@@ -195,15 +195,15 @@ def test_an_unwritten_file_or_a_folder_in_the_way_fails_before_the_swap(tmp_path
 
 _KILLED_DURING_SWAP = """
 import os, signal, sys
-from harness.commands import _outputs
-orig, n = _outputs._swap_one, [0]
+from harness import files
+orig, n = files._swap_one, [0]
 def swap(*a):
     n[0] += 1
     if n[0] == 3:
         os.kill(os.getpid(), signal.SIGKILL)
     orig(*a)
-_outputs._swap_one = swap
-with _outputs.OutputSet(sys.argv[1]) as o:
+files._swap_one = swap
+with files.OutputSet(sys.argv[1]) as o:
     for name in ("a.csv", "b.png", "sub/c.txt", "summary.txt"):
         o.path(name).write_bytes(("new " + name + "\\n").encode())
     o.commit()
@@ -211,8 +211,8 @@ with _outputs.OutputSet(sys.argv[1]) as o:
 
 _KILLED_WHILE_WRITING = """
 import os, signal, sys
-from harness.commands import _outputs
-with _outputs.OutputSet(sys.argv[1]) as o:
+from harness import files
+with files.OutputSet(sys.argv[1]) as o:
     o.path("a.csv").write_bytes(b"new")
     os.kill(os.getpid(), signal.SIGKILL)
 """
@@ -230,7 +230,7 @@ def test_killed_during_the_swap_is_rolled_back_by_the_next_run(tmp_path):
     _run_killed(_KILLED_DURING_SWAP, out)
     # a mix was left (a.csv and b.png new) with the journal and the backups
     stale = list(out.glob(TMP_PREFIX + "*"))
-    assert len(stale) == 1 and (stale[0] / _outputs.JOURNAL).is_file()
+    assert len(stale) == 1 and (stale[0] / files.JOURNAL).is_file()
     assert (out / "a.csv").read_bytes() == b"new a.csv\n"
     # the next set opened there rolls it back, then does its own work
     with OutputSet(out) as o:
@@ -299,14 +299,14 @@ def test_sigterm_to_the_cli_process(tmp_path):
     before = _seed(out, ["s.csv", "summary.txt"])
     code = textwrap.dedent("""
         import os, signal, sys
-        from harness.commands import _outputs
+        from harness import files
         from harness.cli import main
-        orig = _outputs.OutputSet.path
+        orig = files.OutputSet.path
         def path(self, name):
             if name == "summary.txt":
                 os.kill(os.getpid(), signal.SIGTERM)
             return orig(self, name)
-        _outputs.OutputSet.path = path
+        files.OutputSet.path = path
         sys.exit(main(sys.argv[1:]))
     """)
     scen = tmp_path / "s.toml"
@@ -356,7 +356,7 @@ def _commands(tmp_path: Path) -> dict[str, tuple[list[str], Path, list[str]]]:
         "tune": (["tune", str(scen), "--single", "--tuning", "paper", "-o", str(o), "-q"], o,
                  ["s-jerk-times.csv", "summary.txt"]),
         "compare": (["compare", "X", "--peers", "AL*ZV", "--no-tuned-djl", "--timeopt", "0",
-                     "--no-stationary", "-o", str(o), "-q"], o,
+                     "--no-stationary", "--no-bound", "-o", str(o), "-q"], o,
                     ["X.csv", "X-map-error.csv", "X-robustness.csv", "X-map-error.png",
                      "X-robustness.png", "X-runs.png", "summary.txt"]),
         "report": (["report", "--fast", "--claims", "1", "--figures-beside", "-o",

@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from harness.cli import main
-from harness.cosim import Session
 from harness.peers.compare import (
     ALL_PEERS,
     DJL_TUNINGS,
@@ -26,6 +25,7 @@ from harness.peers.residual import residual_amplitude
 from harness.peers.sato import sato_profile
 from harness.peers.trajectory import PiecewiseJerk
 from harness.scenario import parse_scenario
+from harness.simulation.session import Session
 
 SMALL = """
 name = "small"
@@ -71,7 +71,7 @@ MAP_ERRORS = np.linspace(-0.2, 0.2, 9)  # 5 % apart: -10, -5, 0, 5, 10 % within 
 @pytest.fixture(scope="module")
 def comparison(small, session):
     return compare_scenario(small, session=session, errors=np.linspace(-0.2, 0.2, 9),
-                            map_errors=MAP_ERRORS)
+                            map_errors=MAP_ERRORS, bound=False)
 
 
 @pytest.fixture(scope="module")
@@ -115,7 +115,7 @@ def test_stationary_plant_matches_the_exact_residual(small, session):
 
 def test_comparison_table(comparison, small):
     c = comparison
-    assert list(c.methods) == ["AL", "JL", "DJL", *tuned_rows(small), *PEERS]
+    assert list(c.methods) == ["AL", "JL", "DJL", *tuned_rows(small), *PEERS, "recommended"]
     rows = {r["method"]: r for r in c.rows()}
     assert rows["AL"]["residual_pct_of_AL"] == pytest.approx(100.0)
     assert rows["time-optimal JL"]["motion_time_over_time_optimal"] == pytest.approx(1.0)
@@ -196,7 +196,7 @@ def test_tuned_djl_rows(comparison, small, fast_session):
         assert not any(n.startswith("DJL (") for n in c.methods)
         assert any("djl_tuning" in n for n in c.notes)
         return
-    from harness.cosim import run_case
+    from harness.evaluation import run_case
 
     for tu in DJL_TUNINGS:
         mo = c.methods[f"DJL ({tu})"]
@@ -215,15 +215,16 @@ def test_tuned_djl_rows_skipped_gracefully(small, session, monkeypatch):
     import harness.peers.compare as pc
 
     monkeypatch.setattr(pc, "has_djl_tuning", lambda sc: False)
-    c = compare_scenario(small, session=session, peers=("AL*ZV",), map_errors=None)
-    assert list(c.methods) == ["AL", "JL", "DJL", "AL*ZV"]
+    c = compare_scenario(small, session=session, peers=("AL*ZV",), map_errors=None,
+                         bound=False)
+    assert list(c.methods) == ["AL", "JL", "DJL", "AL*ZV", "recommended"]
     assert any("skipped" in n and "djl_tuning" in n for n in c.notes)
     assert "note: DJL (optimal), DJL (robust): skipped" in c.table()
     assert c.map_error is None and math.isnan(c.methods["AL*ZV"].worst_10pct)
     assert "map error" not in "\n".join(c.verdict())
     monkeypatch.undo()
     c = compare_scenario(small, session=session, peers=("AL*ZV",), map_errors=None,
-                         tuned_djl=False)
+                         tuned_djl=False, recommended=False, bound=False)
     assert list(c.methods) == ["AL", "JL", "DJL", "AL*ZV"] and not c.notes
 
 
@@ -265,7 +266,18 @@ def test_sato_design_keeps_limits():
     assert T_SUM == pytest.approx(1.201) and T1 == pytest.approx(1e-3)
 
 
-def test_cli_writes_outputs(tmp_path, fmu2):
+def test_cli_writes_outputs(tmp_path, fmu2, monkeypatch):
+    # the physical limit's plumbing (the bound itself: tests/test_bound.py), with a stand-in
+    import harness.peers.compare as pc
+    from harness.bound import BoundSummary
+
+    seen = []
+
+    def fake_bound(sc, band, **kw):
+        seen.append(band)
+        return BoundSummary(0.5, 0.6, 0.501, 30.0, band, 41, "a stand-in set", 1.0)
+
+    monkeypatch.setattr(pc, "bound_summary", fake_bound)
     scen = tmp_path / "small.toml"
     scen.write_text(SMALL, encoding="utf-8")
     out = tmp_path / "out"
@@ -287,11 +299,19 @@ def test_cli_writes_outputs(tmp_path, fmu2):
     with open(out / "small.csv", newline="", encoding="utf-8") as fh:
         rows = list(csv.DictReader(fh))
     assert [r["method"] for r in rows] == ["AL", "JL", "DJL", "AL*ZV", "JL*ZV", "JL*TV-ZV",
-                                           "damped jerk"]
+                                           "damped jerk", "recommended"]
+    # one bound, in the shared band; every method's worst settle as a ratio to it
+    assert len(seen) == 1 and seen[0] == pytest.approx(float(rows[0]["band_m"]), rel=1e-12)
+    for r in rows:
+        assert float(r["settling_bound_s"]) == 0.5
+        assert float(r["settling_worst_over_bound"]) == pytest.approx(
+            float(r["settling_time_worst_s"]) / 0.5, rel=1e-9)  # CSV: 10 digits
+    assert "/ bound" in text and "physical limit (any profile at JL's jerk, same set): 0.500 s" \
+        in text and "a stand-in set" in text
     assert all(float(r["worst_residual_10pct_m"]) > 0 for r in rows)
     with open(out / "small-map-error.csv", newline="", encoding="utf-8") as fh:
         mrows = list(csv.DictReader(fh))
-    assert len(mrows) == 41 * 7
+    assert len(mrows) == 41 * 8  # with the recommended row's curve
     assert mrows[0]["plant"] == "time-varying plant (Z moving), whole map scaled by 1 + e"
 
 
@@ -301,7 +321,7 @@ def test_cli_tuned_djl_rows(tmp_path, fmu2):
     scen.write_text(SMALL, encoding="utf-8")
     out = tmp_path / "out"
     rc = main(["compare", str(scen), "-o", str(out), "--timeopt", "0", "--no-stationary",
-               "--peers", "AL*ZV", "-q", "--engine", "fast"])
+               "--peers", "AL*ZV", "-q", "--engine", "fast", "--no-bound"])
     assert rc == 0
     text = (out / "summary.txt").read_text()
     import tomllib

@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 from scipy.integrate import quad, solve_ivp
 
-from harness.cosim import Session
 from harness.fmu.runner import generate
 from harness.peers.compare import base_motion, build_peers, stationary_variant
 from harness.peers.residual import residual_amplitude
@@ -21,6 +20,7 @@ from harness.peers.shapers import al_profile, make_shaper, shape, zv
 from harness.peers.trajectory import PiecewiseJerk, from_fmu
 from harness.peers.tv_shaper import TimeVaryingZV, design_for_scenario, shape_time_varying
 from harness.scenario import parse_scenario
+from harness.simulation.session import Session
 
 MOVE = {"distance": 0.4, "v_max": 0.5, "a_max": 4.0, "d_max": 4.0}
 ZETA = 0.03

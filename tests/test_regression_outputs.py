@@ -40,8 +40,8 @@ CASES: dict[str, list[str]] = {
                     "--workers", "1"],
     "online": ["online", "X", "Y", "--jerk-source", "both", "--no-plot"],
     "compare-X-fast": ["compare", "X", "--engine", "fast", "--no-stationary", "--timeopt", "3",
-                       "--no-plot"],
-    "compare-Y-fmu": ["compare", "Y", "--timeopt", "0", "--no-plot"],
+                       "--no-plot", "--no-bound"],
+    "compare-Y-fmu": ["compare", "Y", "--timeopt", "0", "--no-plot", "--no-bound"],
 }
 """Case name (a folder of ``tests/data/regression``) -> the command's arguments."""
 

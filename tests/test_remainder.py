@@ -1,4 +1,4 @@
-"""The remainder the paper's tuning rule leaves (harness.remainder), against simulation.
+"""The remainder the paper's tuning rule leaves (harness.tuning.remainder), against simulation.
 
 Independent references: ``scipy.integrate.solve_ivp`` (DOP853, split at every
 kink of the input) on ε̈ + 2ζω(t)ε̇ + ω(t)²ε = −q̈ for one ramp, a drifting
@@ -15,12 +15,13 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from harness import remainder as rm
-from harness.cosim import Session
 from harness.modemap import ConstantLaw, ModeMap, ModeSpec
-from harness.planner import stage_starts
 from harness.scenario import load_scenario
-from harness.tuning import sinc_residual
+from harness.simulation.axis import stage_starts
+from harness.simulation.session import Session
+from harness.tuning import remainder as rm
+from harness.tuning.rule import sinc_residual
+from harness.tuning.tune import tune_profile
 
 A = 4.0  # acceleration step (m/s2)
 
@@ -342,7 +343,7 @@ def test_four_stages_in_the_default_scenarios(session, name):
     out = {}
     for method in ("paper", "optimal", "robust"):
         sc_m = _with(sc, djl_tuning=method)
-        tu = session.tune(sc_m, "DJL")
+        tu = tune_profile(session, sc_m, "DJL")
         ph, run = rm.move_phasors(session, sc_m, tu.T_F)
         res = run.free_amplitude
         out[method] = (ph, res)
@@ -377,12 +378,12 @@ def test_four_stages_in_the_default_scenarios(session, name):
     # ... which hangs on their phases: stage 1's rotates by tens of rad until the end
     assert ph_o.phases[0] > 25.0 and ph_o.phases[3] == pytest.approx(0.0, abs=1e-9)
     sc_o = _with(sc, djl_tuning="optimal")
-    tu_o = session.tune(sc_o, "DJL")
-    r = session.map_error_residuals(sc_o, "DJL", tu_o.T_F, [0.99, 1.0, 1.01])
+    tu_o = tune_profile(session, sc_o, "DJL")
+    r = session.map_error_residuals(sc_o, "DJL", tu_o.T_F, [-0.01, 0.0, 0.01])
     assert min(r[0], r[2]) > 30 * r[1]
     sc_p = _with(sc, djl_tuning="paper")
-    rp = session.map_error_residuals(sc_p, "DJL", session.tune(sc_p, "DJL").T_F,
-                                     [0.99, 1.0, 1.01])
+    rp = session.map_error_residuals(sc_p, "DJL", tune_profile(session, sc_p, "DJL").T_F,
+                                     [-0.01, 0.0, 0.01])
     assert max(rp[0], rp[2]) < 1.3 * rp[1]
 
 
@@ -395,7 +396,7 @@ def test_paper_rule_against_jl_is_decided_by_phases(session):
         if case.move.v_max != 2.0:
             continue
         n += 1
-        tj, td = session.tune(case, "JL"), session.tune(case, "DJL")
+        tj, td = tune_profile(session, case, "JL"), tune_profile(session, case, "DJL")
         pj, rj = rm.move_phasors(session, case, tj.T_F, "JL")
         pd, rd = rm.move_phasors(session, case, td.T_F, "DJL")
         assert rd.free_amplitude <= pd.bound and rj.free_amplitude <= pj.bound
@@ -413,7 +414,7 @@ def test_plot_jerk_times(session):
     for name in ("X", "Y"):
         sc = load_scenario(name)
         for m in results:
-            results[m].append(session.tune(_with(sc, djl_tuning=m), "DJL"))
+            results[m].append(tune_profile(session, _with(sc, djl_tuning=m), "DJL"))
     fig = rm.plot_jerk_times(results)
     ax = fig.axes[0]
     pts = [ln for ln in ax.lines if len(ln.get_xdata()) == 1]

@@ -7,8 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from harness.claims import CATALOGUE, Check, ClaimResult, ClaimSpec, registered
+from harness.claims import CATALOGUE, Check, ClaimResult, ClaimSpec
 from harness.claims import base as claims_base
+from harness.claims.registry import registered
 from harness.cli import main
 from harness.report import write_report
 

@@ -10,10 +10,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from harness.cosim import Session, run_scenario
 from harness.evaluation import ProfileMetrics
 from harness.results import ProfileOutcome, ScenarioResult, SweepResult, format_table2, table2_rows
 from harness.scenario import load_scenario
+from harness.simulation.session import Session
+from harness.sweeps import run_scenario
 
 
 def plan(d: float, v_reached: float, N: int = 150, T: float = 0.9) -> dict:

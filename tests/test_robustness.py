@@ -10,7 +10,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from harness.cosim import Session, run_case
+from harness.evaluation import run_case
 from harness.modemap import LinearLaw, ModeMap, ModeSpec
 from harness.robustness import (
     DEFAULT_ERRORS,
@@ -20,6 +20,8 @@ from harness.robustness import (
     robustness,
 )
 from harness.scenario import load_scenario
+from harness.simulation.session import Session
+from harness.tuning.tune import tune_profile
 
 
 def short(name: str, t_after: float = 0.6):
@@ -53,7 +55,7 @@ def tuned(fmu2):
     """Scenario X, its session and the jerk times tuned on the nominal map."""
     sc = short("X")
     with Session(fmu2) as s:
-        T = {p: s.tune(sc, p) for p in ("AL", "JL", "DJL")}
+        T = {p: tune_profile(s, sc, p) for p in ("AL", "JL", "DJL")}
         yield sc, s, {p: (t.T_F if t is not None else None) for p, t in T.items()}
 
 
@@ -156,7 +158,8 @@ def test_result_rows_plot_and_label(tuned):
 
 
 def test_a_vectorised_session_method_is_used(tuned):
-    """A session with map_error_residuals(sc, profile, T_F, factors) answers instead."""
+    """The session's map_error_residuals(sc, profile, T_F, errors) answers (errors e, not
+    factors 1 + e: Session.map_error_residuals)."""
     sc, s, T = tuned
     calls = []
 
@@ -164,11 +167,11 @@ def test_a_vectorised_session_method_is_used(tuned):
         def __getattr__(self, name):
             return getattr(s, name)
 
-        def map_error_residuals(self, sc_, profile, T_F, factors):
-            calls.append((profile, T_F, np.array(factors)))
-            return np.asarray(factors) * 1e-3
+        def map_error_residuals(self, sc_, profile, T_F, errors):
+            calls.append((profile, T_F, np.array(errors)))
+            return (1.0 + np.asarray(errors)) * 1e-3
 
     got = map_error_residuals(sc, Vectorised(), "DJL", T["DJL"], [-0.1, 0.05])
     assert got == pytest.approx([0.9e-3, 1.05e-3])
     assert calls[0][0] == "DJL" and calls[0][1] == T["DJL"]
-    assert calls[0][2] == pytest.approx([0.9, 1.05])
+    assert calls[0][2] == pytest.approx([-0.1, 0.05])

@@ -1,7 +1,8 @@
-"""``djl-fmu tune`` and :mod:`harness.jerktimes`: tuned jerk times, their CSV, the FMU round trip.
+"""``djl-fmu tune`` and :mod:`harness.tuning.tables`: tuned jerk times, their CSV, the FMU round
+trip.
 
 Every number of the table is checked against an independent recomputation:
-the jerk times against ``Session.tune``, the residuals against a full
+the jerk times against ``tune_profile``, the residuals against a full
 co-simulation (``Session.run(...).free_amplitude``, on the fast engine and on
 the generator FMU), the worst cases against ``harness.robustness``, and the
 file is read back and fed to the FMU, which must apply exactly those jerk
@@ -20,7 +21,8 @@ import numpy as np
 import pytest
 
 from harness.cli import main
-from harness.jerktimes import (
+from harness.scenario import load_scenario, parse_scenario
+from harness.tuning.tables import (
     COLUMN_NAMES,
     COLUMNS,
     FORMAT,
@@ -31,7 +33,7 @@ from harness.jerktimes import (
     parse_tuning,
     tune_table,
 )
-from harness.scenario import load_scenario, parse_scenario
+from harness.tuning.tune import tune_profile
 
 from _scenarios import SMALL_AXIS
 
@@ -79,7 +81,7 @@ def _close(a: float, b: float, rel: float = REL) -> bool:
 
 @pytest.fixture(scope="module")
 def session():
-    from harness.cosim import Session
+    from harness.simulation.session import Session
 
     s = Session(engine="fast")
     yield s
@@ -113,11 +115,12 @@ def test_parse_tuning():
     assert parse_tuning("end") == ("robust", "end")
     assert parse_tuning("djl=optimal,jl=optimal") == ("optimal", "optimal")
     assert parse_tuning(" jl=optimal , robust ") == ("robust", "optimal")
-    for bad, msg in (("fast", "unknown DJL tuning method 'fast'"),
+    for bad, msg in (("fast", "'fast' is not a tuning method"),
                      ("jl=robust", "unknown JL tuning method 'robust'"),
                      ("djl=end", "unknown DJL tuning method 'end'"),
                      ("xl=paper", "unknown profile 'xl'"),
-                     ("paper,robust", "given twice")):
+                     ("paper,robust", "a table has one DJL method, 'paper' and 'robust' "
+                                      "are given")):
         with pytest.raises(ValueError, match=msg):
             parse_tuning(bad)
 
@@ -139,14 +142,13 @@ def test_tune_table_refuses_bad_arguments():
 
 
 def test_single_move_against_independent_recomputation(x_robust, session):
-    from harness.optimize import TuningOptions
     from harness.robustness import map_error_residuals
 
     assert len(x_robust) == 1 and x_robust.kind == "move"
     r = x_robust.rows[0]
     sc = _methods(load_scenario("X"), "robust", "end")
-    djl = session.tune(sc, "DJL")
-    jl = session.tune(sc, "JL")
+    djl = tune_profile(session, sc, "DJL")
+    jl = tune_profile(session, sc, "JL")
     assert djl.rule == "robust" and jl.rule == "end"
     # the jerk times
     assert tuple(r[f"djl_N_F{i}"] for i in range(1, 5)) == djl.N_F
@@ -166,11 +168,12 @@ def test_single_move_against_independent_recomputation(x_robust, session):
     assert r["jl_motion_time_s"] == pytest.approx(run_j.motion_time, abs=1e-12)
     assert r["z_v_max_m_s"] == pytest.approx(run_d.z_v_max, rel=1e-12)
     assert r["jl_z_v_max_m_s"] == pytest.approx(run_j.z_v_max, rel=1e-12)
-    # the worst cases, by harness.robustness over the same 21 map errors
-    f = TuningOptions(0.1).factors()
-    assert f.size == 21
-    w_d = map_error_residuals(sc, session, "DJL", djl.T_F, f - 1.0)
-    w_j = map_error_residuals(sc, session, "JL", jl.T_F, f - 1.0)
+    # the worst cases, by harness.robustness over the scoring set: 41 map scales in +/-10 %
+    # (not the 9 the robust DJL was tuned on)
+    e = np.linspace(-0.1, 0.1, 41)
+    assert np.allclose(sorted(p.scale for p in sc.uncertainty.scoring_set().points), e)
+    w_d = map_error_residuals(sc, session, "DJL", djl.T_F, e)
+    w_j = map_error_residuals(sc, session, "JL", jl.T_F, e)
     assert _close(r["worst_residual_m"], float(np.max(w_d)))
     assert _close(r["jl_worst_residual_m"], float(np.max(w_j)))
     # and as the search reported them
@@ -221,7 +224,8 @@ def test_csv_header_documents_every_column(x_csv):
     head = "\n".join(comments)
     for key in ("format: 1", "scenario: X", "source: <embedded X>", "djl_method: robust",
                 "jl_method: end", "map_error: 0.1", "Te_s: 0.001", "units: SI",
-                "uncertainty: the whole mode map f(z) scaled by 1 + e, |e| <= 0.1 (21 points"):
+                "uncertainty: map scale +/-10 % (robust tuning: the 9-point tuning set; "
+                "the worst_* columns: the 41-point scoring set)"):
         assert f"# {key}" in head, key
     for c in COLUMNS:  # every column has its line, with its unit
         assert any(ln.split()[1:3] == [c.name, f"[{c.unit}]"] for ln in comments), c.name
@@ -256,9 +260,9 @@ def test_csv_round_trip_is_exact(x_robust, x_csv):
 
 
 def test_fmu_applies_the_loaded_jerk_times_and_reproduces_the_residual(x_csv, session):
-    from harness.cosim import Session
-    from harness.engine import FastAxis
     from harness.fmu.runner import generate
+    from harness.simulation.fast_axis import FastAxis
+    from harness.simulation.session import Session
 
     row = load_jerk_times(x_csv).rows[0]
     sc = load_scenario("X")
@@ -349,7 +353,7 @@ def test_map_rows_in_grid_order_and_each_row_is_its_move(map_serial, session):
     # two moves recomputed on their own
     for k in (3, 6):
         case = _methods(sc.map_case(*pts[k]), "optimal", "end")
-        djl = session.tune(case, "DJL")
+        djl = tune_profile(session, case, "DJL")
         r = map_serial.rows[k]
         assert tuple(r[f"djl_N_F{i}"] for i in range(1, 5)) == djl.N_F
         assert _close(r["residual_m"], session.run(case, "DJL", djl.T_F).free_amplitude)
@@ -390,7 +394,7 @@ def test_sweep_cases_in_order(session):
         assert (r["distance_m"], r["z_distance_m"], r["v_max_m_s"]) == (
             case.move.distance, case.z.distance, case.move.v_max)
         c = _methods(case, "paper", "optimal")
-        djl, jl = session.tune(c, "DJL"), session.tune(c, "JL")
+        djl, jl = tune_profile(session, c, "DJL"), tune_profile(session, c, "JL")
         assert tuple(r[f"djl_N_F{i}"] for i in range(1, 5)) == djl.N_F
         assert r["jl_N_F"] == jl.N_F[0] and jl.rule == "optimal"
         assert _close(r["jl_residual_m"], session.run(c, "JL", jl.T_F).free_amplitude)
@@ -468,7 +472,7 @@ def test_cli_bad_inputs_exit_2_and_write_nothing(tmp_path, capsys, monkeypatch):
     afile = tmp_path / "afile"
     afile.write_text("x")
     cases = [
-        ([str(good), "--tuning", "fastest"], "unknown DJL tuning method 'fastest'"),
+        ([str(good), "--tuning", "fastest"], "'fastest' is not a tuning method"),
         ([str(good), "--tuning", "jl=robust"], "unknown JL tuning method 'robust'"),
         ([str(good), "--map-error", "1"], "--map-error must be in [0, 1)"),
         ([str(good), "--map-error", "-0.1"], "--map-error must be in [0, 1)"),
@@ -497,16 +501,16 @@ def test_cli_bad_inputs_exit_2_and_write_nothing(tmp_path, capsys, monkeypatch):
 
 
 def test_cli_failing_move_exit_1_and_writes_nothing(tmp_path, capsys, monkeypatch):
-    import harness.jerktimes
+    import harness.tuning.tables
 
-    real = harness.jerktimes.tune_move
+    real = harness.tuning.tables.tune_move
 
     def flaky(case, session, index=0):
         if index == 2:
             raise ValueError("planner refused")
         return real(case, session, index)
 
-    monkeypatch.setattr(harness.jerktimes, "tune_move", flaky)
+    monkeypatch.setattr(harness.tuning.tables, "tune_move", flaky)
     scen = tmp_path / "s.toml"
     scen.write_text(SCENARIO)
     out = tmp_path / "out"

@@ -8,11 +8,12 @@ import math
 import numpy as np
 import pytest
 
-from harness.cosim import Session
 from harness.fmu.runner import generate
-from harness.planner import MoveSamples, stage_starts
 from harness.scenario import load_scenario
-from harness.tuning import sinc_residual, tune_djl, tune_jl
+from harness.simulation.axis import MoveSamples, stage_starts
+from harness.simulation.session import Session
+from harness.tuning.rule import sinc_residual, tune_djl, tune_jl
+from harness.tuning.tune import tune_profile
 
 Te = 1e-3
 
@@ -159,8 +160,8 @@ def _jerk_from_ramps(t, starts, N, levels):
 def test_default_scenarios_djl_tuning_with_the_fmu(fmu2, name):
     sc = load_scenario(name)
     with Session(fmu2) as s:
-        djl = s.tune(sc, "DJL")
-        jl = s.tune(sc, "JL")
+        djl = tune_profile(s, sc, "DJL")
+        jl = tune_profile(s, sc, "JL")
         run = s.run(sc, "DJL", djl.T_F)
     assert djl.converged and 1 <= djl.iterations <= 8
     # the FMU applied the jerk times asked for
@@ -199,8 +200,8 @@ def test_constant_mode_with_the_fmu(fmu3):
     sc = load_scenario("X")
     sc = dataclasses.replace(sc, modemap=ModeMap((ModeSpec(ConstantLaw(7.3), 0.02),)))
     with Session(fmu3) as s:
-        djl = s.tune(sc, "DJL")
-        jl = s.tune(sc, "JL")
+        djl = tune_profile(s, sc, "DJL")
+        jl = tune_profile(s, sc, "JL")
     n = int(round(1 / 7.3 / Te))
     assert djl.N_F == (n,) * 4 and jl.N_F == (n,) * 4
     assert djl.converged and jl.converged

@@ -54,6 +54,11 @@ final Z position and its damping) unless said otherwise:
                     time-varying ZV shaper (after Chang & Park 2005): each
                     impulse pair placed half a local damped period apart and
                     weighted from the mode along the synchronised Z move
+  JL*SI             the JL convolved with a specified-insensitivity shaper
+                    (Singhose et al. 1996): three impulses, V <= 5 % over the
+                    end frequency x (1 +/- the uncertainty's map scale)
+  JL*MM-ZVD         one ZVD per mode of the map, convolved (added by default
+                    when the map has several modes)
   damped jerk       the AL profile filtered by the damped-jerk filter
                     (Bearee 2014, 4.2)
   DJL (optimal), DJL (robust)
@@ -68,8 +73,17 @@ shared by every method), the worst residual over a map error within +/-10 %
 on the time-varying plant (the whole f(z) map scaled by 1 + e, every reference
 planned once on the nominal map; curves over +/-20 %, fast engine), and the
 residual against the mode-frequency error on a stationary mode at the end
-frequency.  A verdict closes each table: who leaves the least residual, who
-settles first, who has the smallest worst case, with the numbers.
+frequency.  Every method is also scored over the scenario's uncertainty
+(--uncertainty; default map scale +/-10 %, its 41-point scoring set): worst
+residual and worst-case settling time, and that settling as a ratio to the
+physical limit ("/ bound": a linear programme over piecewise-constant jerk
+proves that no profile at JL's jerk, under the same v_max and a_max, settles
+sooner over the same set; about 30 s per scenario the first time, then cached;
+--no-bound skips it; not computed for the stationary variants).  The row
+"recommended" is the profile the project recommends (docs/recommend.md).
+A verdict closes each table: who leaves the least residual, who settles
+first, who has the smallest worst case, how far the best jerk-limited method
+is from the limit, with the numbers.
 Each scenario also runs as a stationary variant (Z still at its final
 position), unless --no-stationary.  With --timeopt N (default 30), random moves
 measure how much slower than time-optimal the FIR-built JL and DJL are (per
@@ -81,7 +95,10 @@ scenario; default: X and Y.  Sweeps are not accepted.
 Outputs, in --out (default ./djl-fmu-out/compare), written once every run has
 succeeded:
   <name>.csv              one row per method (worst_residual_10pct_m: the
-                          worst case over a map error within +/-10 %)
+                          worst case over a map error within +/-10 %;
+                          settling_time_worst_s, settling_bound_s and
+                          settling_worst_over_bound: the worst-case settling,
+                          the physical limit and their ratio)
   <name>-map-error.csv    residual against the map error e (time-varying plant,
                           whole map scaled by 1 + e), per method
   <name>-map-error.png    the same, plotted
@@ -136,9 +153,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--peers", default=None, metavar="LIST",
                    help="comma-separated subset of the peers (default: time-optimal JL, "
                         "Sato III, AL*ZV, AL*ZVD, AL*MZV, AL*EI, JL*ZV, JL*ZVD, JL*EI, "
-                        "AL*TV-ZV, JL*TV-ZV, damped jerk; also JL*MZV)")
+                        "JL*SI, AL*TV-ZV, JL*TV-ZV, damped jerk; JL*MM-ZVD with several "
+                        "modes; also JL*MZV)")
     p.add_argument("--no-tuned-djl", action="store_true",
                    help="do not add the rows DJL (optimal) and DJL (robust)")
+    p.add_argument("--no-bound", action="store_true",
+                   help="do not compute the physical limit (the '/ bound' column; about 30 s "
+                        "per scenario the first time, then cached)")
     p.add_argument("--timeopt", type=int, default=30, metavar="N",
                    help="random moves per case for the FIR-JL/DJL vs time-optimal "
                         "measurement (default 30; 0 to skip)")
@@ -194,7 +215,8 @@ def run(args: argparse.Namespace) -> int:
         for sc in tqdm(scenarios, disable=not show, desc="scenarios", leave=False):
             current = sc.name
             results.append(compare_scenario(sc, peers=peers, engine=args.engine,
-                                            tuned_djl=not args.no_tuned_djl))
+                                            tuned_djl=not args.no_tuned_djl,
+                                            bound=not args.no_bound and sc.z.moves))
         table_t = None
         if args.timeopt:
             current = "time-optimal measurement"

@@ -64,6 +64,7 @@ from typing import Any
 
 import numpy as np
 
+from ..bound import bound_summary
 from ..evaluation import profile_metrics, run_case
 from ..files import write_csv
 from ..fmu import spec as fmu_spec
@@ -393,6 +394,9 @@ class PeerComparison:
         Residual of every method when the whole map f(z) of the plant is
         scaled by 1 + e (time-varying plant, references planned on the
         nominal map); None when not computed.
+    bound : harness.bound.BoundSummary, optional
+        The physical limit: the least worst-case settling time any profile at
+        JL's jerk can reach over the scoring set; None when not computed.
     notes : list of str
         What was skipped and why.
     motions : dict
@@ -414,11 +418,13 @@ class PeerComparison:
     motions: dict[str, Any] = field(default_factory=dict)
     recommendation: Any = None
     uncertainty: str = ""
+    bound: Any = None
 
     def rows(self) -> list[dict[str, Any]]:
         """One dict per method (the CSV rows)."""
         ref = self.methods["AL"].metrics
         sc = self.scenario
+        limit = self.bound.t_settle if self.bound is not None else math.nan
         out = []
         for n, mo in self.methods.items():
             me = mo.metrics
@@ -442,6 +448,8 @@ class PeerComparison:
                 "residual_worst_m": mo.residual_worst,
                 "settling_time_worst_s": mo.settling_worst,
                 "worst_point": mo.worst_point,
+                "settling_bound_s": limit,
+                "settling_worst_over_bound": mo.settling_worst / limit,
                 "uncertainty": self.uncertainty,
                 "jerk_peak_m_s3": mo.jerk_peak,
                 "jerk_over_JL": mo.jerk_peak / self.jerk_jl,
@@ -504,6 +512,16 @@ class PeerComparison:
         if any(math.isfinite(v) for v in ws.values()):
             out.append("  first settled in the worst case (" + self.uncertainty + "): "
                        + two(_ranking(ws, 1e-9), ws, fmt_t))
+        if self.bound is not None and any(math.isfinite(v) for v in ws.values()):
+            jl_jerk = self.jerk_jl * (1 + 1e-6)
+            limited = [(v, n) for n, v in ws.items()
+                       if math.isfinite(v) and self.methods[n].jerk_peak <= jl_jerk]
+            lim = self.bound.t_settle
+            if limited:
+                v, n = min(limited)
+                out.append(f"  physical limit (any profile at JL's jerk, same set): {lim:.3f} s;"
+                           f" the first jerk-limited method, {n}, at {v / lim:.3f} x it "
+                           f"(+{100 * (v / lim - 1):.1f} %)")
         return out
 
     def table(self) -> str:
@@ -521,12 +539,14 @@ class PeerComparison:
                  f"(j_max = a_max / T_F(JL))", ""]
         head = (f"{'method':<16}{'motion [s]':>11}{'/ t.-opt.':>10}{'residual [mm]':>15}"
                 f"{'% of AL':>9}{'settling [s]':>14}{'worst±10% [mm]':>16}"
-                f"{'worst settle [s]':>18}{'v/v_max':>9}{'a/a_max':>9}{'j/j_JL':>10}")
+                f"{'worst settle [s]':>18}{'/ bound':>9}{'v/v_max':>9}{'a/a_max':>9}"
+                f"{'j/j_JL':>10}")
         lines += [head, "-" * len(head)]
         for r in self.rows():
             st = r["settling_time_s"]
             w = r["worst_residual_10pct_m"]
             ws = r["settling_time_worst_s"]
+            wb = r["settling_worst_over_bound"]
             jj = r["jerk_over_JL"]
             lines.append(
                 f"{r['method']:<16}{r['motion_time_s']:>11.3f}"
@@ -535,6 +555,7 @@ class PeerComparison:
                 f"{(f'{st:.3f}' if math.isfinite(st) else 'never'):>14}"
                 f"{(f'{w * 1e3:.4g}' if math.isfinite(w) else '-'):>16}"
                 f"{(f'{ws:.3f}' if math.isfinite(ws) else 'never'):>18}"
+                f"{(f'{wb:.3f}' if math.isfinite(wb) else '-'):>9}"
                 f"{r['v_peak_over_v_max']:>9.2f}{r['a_peak_over_a_max']:>9.2f}"
                 f"{(f'{jj:.2f}' if math.isfinite(jj) else 'no limit'):>10}")
         lines.append("")
@@ -547,6 +568,8 @@ class PeerComparison:
             lines.append(f"worst settle: worst-case settling time over the {self.uncertainty} "
                          f"(never the points a method was tuned on); j/j_JL: largest jerk over "
                          f"JL's, 'no limit' where the acceleration steps (AL-based).")
+        if self.bound is not None:
+            lines.append(f"/ bound: worst settle over the {self.bound.describe()}.")
         for mo in self.methods.values():
             if mo.name not in BASE:
                 lines.append(f"  {mo.name}: {mo.tuned_to}")
@@ -740,7 +763,7 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
                      errors: np.ndarray | None = None, engine: str = "fmu",
                      map_errors: Sequence[float] | np.ndarray | None = MAP_ERRORS,
                      map_engine: str = "fast", tuned_djl: bool = True,
-                     recommended: bool = True) -> PeerComparison:
+                     recommended: bool = True, bound: bool = True) -> PeerComparison:
     """Run AL / JL / DJL and the peers on one (non-sweep) scenario.
 
     Parameters
@@ -774,6 +797,11 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
         Add the row ``recommended`` (:func:`harness.recommend.recommend`: the
         robust-tuned member of DJL, JL*shaper and DJL*shaper that settles first
         in the worst case of the tuning set, at JL's jerk).
+    bound : bool
+        Compute the physical limit (:func:`harness.bound.bound_summary`: no
+        profile at JL's jerk settles sooner in the worst case of the scoring
+        set) and report every method's worst-case settling as a ratio to it.
+        About 30 s the first time per move and band, then from the disk cache.
 
     Returns
     -------
@@ -827,6 +855,8 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
         elif tuned_djl:
             notes.append("DJL (optimal), DJL (robust): skipped, this harness has no "
                          "compare.djl_tuning yet")
+        if len(sc.modemap.modes) > 1 and "JL*MM-ZVD" not in peers and tuple(peers) == PEERS:
+            peers = (*peers, "JL*MM-ZVD")  # several modes: add the multi-mode shaper
         built = build_peers(sc, jl.T_F[0], jl.metrics.motion_time, peers=peers,
                             fmi_version=sc.simulation.fmi_version, session=session)
         for n, (mot, spec) in built.items():
@@ -857,6 +887,7 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
             mo.worst_point = str(sco["worst_point"])
             mo.jerk_peak = float(peaks(mo.run)["j_peak"])
             mo.fmu_parameters = _fmu_parameters(sc, n, mo, base, built, rec)
+        limit = bound_summary(sc, band, session=msession) if bound else None
         map_result = None
         if map_errors is not None:
             e = np.asarray(map_errors, dtype=float).ravel()
@@ -893,7 +924,7 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
     rc = robustness_curve(motions, f_end, zeta, err, reference="AL")
     return PeerComparison(sc, methods, band, base.band_source, T_opt, f_end, zeta, rc, base,
                           map_result, notes, motions, recommendation=rec,
-                          uncertainty=base.uncertainty)
+                          uncertainty=base.uncertainty, bound=limit)
 
 
 def _fmu_parameters(sc: Any, name: str, mo: MethodOutcome, base: Any, built: dict[str, Any],

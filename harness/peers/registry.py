@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 from .context import PeerBuilder, PeerContext, PeerSpec
 from .damped_jerk import build_damped_jerk
+from .robust_shapers import build_mm_zvd, build_si
 from .ruckig_ref import build_time_optimal
 from .sato import build_sato
 from .shapers import build_shaped
@@ -49,10 +50,12 @@ REGISTRY: tuple[Peer, ...] = (
     Peer("JL*ZV", build_shaped),
     Peer("JL*ZVD", build_shaped),
     Peer("JL*EI", build_shaped),
+    Peer("JL*SI", build_si),
     Peer("AL*TV-ZV", build_tv_shaped),
     Peer("JL*TV-ZV", build_tv_shaped),
     Peer("damped jerk", build_damped_jerk),
     Peer("JL*MZV", build_shaped, default=False),
+    Peer("JL*MM-ZVD", build_mm_zvd, default=False),
 )
 """Every peer, in table order."""
 

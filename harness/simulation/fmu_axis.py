@@ -46,6 +46,7 @@ class FMUAxis:
         self.g = GeneratorFMU(fmu, fmi_version=fmi_version, instance_name=name)
         self.name = name
         self._fresh = True
+        self._stepped = False  # stepped since the last plan: points() re-plans first
         self.params: dict[str, Any] = {}
         self.start_time = 0.0
 
@@ -71,6 +72,7 @@ class FMUAxis:
         else:
             g.replan(params, start_time)
         self._fresh = False
+        self._stepped = False
         self.start_time = start_time
         self.params = dict(params)
         return float(g.get("motion_time"))
@@ -92,6 +94,10 @@ class FMUAxis:
                ) -> PointSamples:
         """Step the planned FMU: its outputs at the points 0, h, ..., n·h.
 
+        Always from the start of the planned move, like the fast engine: a
+        second call on an instance already stepped re-plans it with the same
+        parameters first (an FMU only steps forward).
+
         Parameters
         ----------
         n : int
@@ -110,6 +116,9 @@ class FMUAxis:
         PointSamples
         """
         g = self.g
+        if self._stepped:
+            self.plan(self.params, self.start_time)
+        self._stepped = True
         reals = tuple(nm for nm in names if g.variable(nm).type in ("Real", "Float64"))
         flags = tuple(nm for nm in names if nm not in reals)
         rec: dict[str, list[float]] = {}
@@ -202,6 +211,7 @@ class FMUAxis:
         if t_stop is None:
             t_stop = max(g.motion_start(), start_time) + motion_time
         n = int(round((t_stop - start_time) / Te))
+        self._stepped = True
         t, v = g.record(n, Te, ("x", "v", "a", "j", "a_AL"))
         return MoveSamples(t, v["x"], v["v"], v["a"], v["j"], v["a_AL"], motion_time,
                            self.N_F(), t_start)

@@ -224,8 +224,9 @@ class ShapedObjective:
         nm = len(self.modes)
         amp = amp.reshape(len(self.points), nm, *amp.shape[1:])
         s = sig.reshape(len(self.points), nm)[:, :, None, None]
-        need = np.where(amp * nm > self.band,
-                        np.log(np.maximum(amp * nm, self.band) / self.band) / s, 0.0)
+        over = np.log(np.maximum(amp * nm, self.band) / self.band)  # 0 inside the band
+        with np.errstate(divide="ignore", invalid="ignore"):  # undamped: never settles
+            need = np.where(over > 0, over / s, 0.0)
         return T + need.max(axis=1).max(axis=0)
 
     def settling_estimate(self, amplitudes: np.ndarray, delays: tuple[int, ...]) -> np.ndarray:
@@ -238,8 +239,9 @@ class ShapedObjective:
         amp, sig, T = self.residuals(amplitudes, delays)
         nm = len(self.modes)
         s = sig.reshape(len(self.points), nm)[:, :, None]
-        need = np.where(amp * nm > self.band,
-                        np.log(np.maximum(amp * nm, self.band) / self.band) / s, 0.0)
+        over = np.log(np.maximum(amp * nm, self.band) / self.band)  # 0 inside the band
+        with np.errstate(divide="ignore", invalid="ignore"):  # undamped: never settles
+            need = np.where(over > 0, over / s, 0.0)
         return T + need.max(axis=1).max(axis=0)
 
 

@@ -323,8 +323,8 @@ def tune_move(case: Scenario, session: Session, index: int = 0) -> dict[str, Any
 
     Notes
     -----
-    The residuals are computed by :class:`harness.tuning.search.Objective`, the
-    function the optimal and robust searches minimise: the free-oscillation
+    The residuals are computed by :meth:`harness.simulation.session.Session.residuals_under`
+    (the plant stepped forward, not the searches' adjoint): the free-oscillation
     amplitude when the reference ends, Z moving as in the scenario; the worst
     case is the largest over the scoring set of the scenario's uncertainty
     (:meth:`harness.uncertainty.UncertaintySpec.scoring_set`; the robust method
