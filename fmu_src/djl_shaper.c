@@ -204,7 +204,12 @@ djl_status djl_shaper_design(const djl_shaper_params *sp, double Te, double f_mo
         }
     }
     for (i = 0; i < s.n; i++) {
+        double r;
         s.d[i] = s.t[i] / Te;
+        /* a delay within 1e-9 of a whole number of samples is that number: the copy's
+         * samples are then the plan's samples (3 Te / Te is not always 3) */
+        r = djl_floor(s.d[i] + 0.5);
+        if (djl_fabs(s.d[i] - r) <= 1e-9 * djl_fmax(1.0, r)) s.d[i] = r;
         if (s.t[i] > s.t_max) s.t_max = s.t[i];
         if (s.d[i] > s.d_max) s.d_max = s.d[i];
         if (s.phase[i] > s.phase_max) s.phase_max = s.phase[i];
