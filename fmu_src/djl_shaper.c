@@ -385,41 +385,50 @@ void djl_shaper_eval(const djl_shaper *sh, const djl_plan *plan, double u, doubl
                      const djl_shaper_memory *mem, int left, int32_t *cursor,
                      int32_t cursors[DJL_MAX_SHAPER_IMPULSES], djl_sample *out)
 {
-    double x = 0.0, v = 0.0, a = 0.0, j = 0.0, ui;
-    djl_sample c0, c;
+    double x = 0.0, v = 0.0, a = 0.0, j = 0.0, x0 = 0.0, v0 = 0.0, a0 = 0.0, j0 = 0.0, ui;
+    djl_sample c;
+    const djl_sample *cp;
     int32_t i, done = 1, past = mem && mem->n_past > 0;
-    int phase = sh && sh->source == DJL_SHAPER_SOURCE_F_MODE && mem && mem->n_phase > 0;
+    int phase;
     if (left)
         djl_eval_left(plan, u, cursor, out);
     else
         djl_eval(plan, u, cursor, out);
     if (!sh || sh->n == 0) return;
-    memset(&c0, 0, sizeof c0);
+    phase = sh->source == DJL_SHAPER_SOURCE_F_MODE && mem && mem->n_phase > 0;
     for (i = 0; i < sh->n; i++) {
+        int before;
         ui = phase ? phase_back(mem, u + offset, sh->phase[i]) - offset : u - sh->d[i];
-        if (ui == u && (!past || !(left ? ui <= 0.0 : ui < 0.0)))
-            c = *out; /* the plan at u itself: the same values */
-        else if (past && (left ? ui <= 0.0 : ui < 0.0))
-            past_eval(mem, ui + offset, plan->p.Te, left, &c);
-        else if (left)
-            djl_eval_left(plan, ui, &cursors[i], &c);
-        else
-            djl_eval(plan, ui, &cursors[i], &c);
+        before = past && (left ? ui <= 0.0 : ui < 0.0); /* before the plan: from the past */
+        if (ui == u && !before) {
+            cp = out; /* the plan at u itself: the values just evaluated */
+        } else {
+            if (before)
+                past_eval(mem, ui + offset, plan->p.Te, left, &c);
+            else if (left)
+                djl_eval_left(plan, ui, &cursors[i], &c);
+            else
+                djl_eval(plan, ui, &cursors[i], &c);
+            cp = &c;
+        }
         if (!(left ? ui > (double)plan->k_end : ui >= (double)plan->k_end)) done = 0;
         if (i == 0) {
-            c0 = c;
+            x0 = cp->x;
+            v0 = cp->v;
+            a0 = cp->a;
+            j0 = cp->j;
         } else {
             double A = sh->A[i];
-            x += A * (c.x - c0.x);
-            v += A * (c.v - c0.v);
-            a += A * (c.a - c0.a);
-            j += A * (c.j - c0.j);
+            x += A * (cp->x - x0);
+            v += A * (cp->v - v0);
+            a += A * (cp->a - a0);
+            j += A * (cp->j - j0);
         }
     }
-    out->x = c0.x + x;
-    out->v = c0.v + v;
-    out->a = c0.a + a;
-    out->j = c0.j + j;
+    out->x = x0 + x;
+    out->v = v0 + v;
+    out->a = a0 + a;
+    out->j = j0 + j;
     out->done = done;
 }
 
