@@ -309,8 +309,7 @@ static model_status set_input(model_instance *m, const model_var *v, double valu
                                 "outside [Te/2, %d Te] at Te = %g s (the previous value, %g Hz, "
                                 "is kept)", value, 1.0 / value, DJL_MAX_FILTER_SAMPLES, d->p.Te,
                                 d->f_mode);
-        if (d->shaper.n > 0 && d->shaper.source == DJL_SHAPER_SOURCE_F_MODE &&
-            (d->state & MS_STEP) &&
+        if (d->planned && d->shaper.n > 0 && d->shaper.source == DJL_SHAPER_SOURCE_F_MODE &&
             !(d->shaper.phase_max / (value * d->p.Te) <= (double)DJL_MAX_SHAPER_DELAY_SAMPLES))
             return model_refuse(m, "set: invalid input f_mode = %g Hz: with shaper_source = 2 the "
                                 "shaper's last impulse would be %g samples of Te = %g s late, "

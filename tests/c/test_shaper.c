@@ -420,7 +420,7 @@ static void run_case(tally *t)
             break;
         }
     if (by_phase) t->by_fmode++;
-    whole = jerk_source > 1 || by_phase || urand() < 0.5;
+    whole = jerk_source > 1 || urand() < 0.5; /* f_mode changes only with whole steps */
     if (!whole) t->fractional++;
     t->cases++;
     /* the two instances */
@@ -528,7 +528,7 @@ static void run_case(tally *t)
                     last_stop = 0;
                 }
             }
-            if ((by_phase || jerk_source > 1) && step_no > 0 && urand() < 0.2) {
+            if ((by_phase || jerk_source > 1) && whole && step_no > 0 && urand() < 0.2) {
                 double f = f_mode * (1.0 + (urand() - 0.5) * (urand() < 0.1 ? 0.5 : 0.02));
                 if (f >= f_lo && f <= f_hi) {
                     a.set_f = 1;
