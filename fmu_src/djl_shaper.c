@@ -206,10 +206,10 @@ djl_status djl_shaper_design(const djl_shaper_params *sp, double Te, double f_mo
     for (i = 0; i < s.n; i++) {
         double r;
         s.d[i] = s.t[i] / Te;
-        /* a delay within 1e-9 of a whole number of samples is that number: the copy's
-         * samples are then the plan's samples (3 Te / Te is not always 3) */
+        /* a delay within 1e-9 samples of a whole number of samples is that number: the
+         * copy's samples are then the plan's samples (3 Te / Te is not always 3) */
         r = djl_floor(s.d[i] + 0.5);
-        if (djl_fabs(s.d[i] - r) <= 1e-9 * djl_fmax(1.0, r)) s.d[i] = r;
+        if (djl_fabs(s.d[i] - r) <= 1e-9) s.d[i] = r;
         if (s.t[i] > s.t_max) s.t_max = s.t[i];
         if (s.d[i] > s.d_max) s.d_max = s.d[i];
         if (s.phase[i] > s.phase_max) s.phase_max = s.phase[i];
@@ -335,7 +335,7 @@ static double phase_back(const djl_shaper_memory *m, double s, double ph)
 {
     int32_t lo = 0, hi = m->n_phase - 1, mid;
     const djl_phase_point *e;
-    double target;
+    double target, tau, r;
     if (ph == 0.0) return s;
     /* the entry in force at s (the first if none) */
     while (lo < hi) {
@@ -344,15 +344,23 @@ static double phase_back(const djl_shaper_memory *m, double s, double ph)
     }
     e = &PHASE(m, lo);
     target = e->P + e->rate * (s - (double)e->k) - ph;
-    if (target >= e->P) return s - ph / e->rate; /* in the same entry: directly */
-    hi = lo;
-    lo = 0;
-    while (lo < hi) { /* the last entry whose phase is at most the target (the first if none) */
-        mid = (lo + hi + 1) / 2;
-        if (PHASE(m, mid).P <= target) lo = mid; else hi = mid - 1;
+    if (target >= e->P) { /* in the same entry: directly */
+        tau = s - ph / e->rate;
+    } else {
+        hi = lo;
+        lo = 0;
+        while (lo < hi) { /* the last entry whose phase is at most the target (else the first) */
+            mid = (lo + hi + 1) / 2;
+            if (PHASE(m, mid).P <= target) lo = mid; else hi = mid - 1;
+        }
+        e = &PHASE(m, lo);
+        tau = (double)e->k + (target - e->P) / e->rate;
     }
-    e = &PHASE(m, lo);
-    return (double)e->k + (target - e->P) / e->rate;
+    /* within 1e-9 samples of a sample it is that sample, as a delay of shaper_source = 1 is
+     * (f_mode Te = 1/16: delays of 8 samples, not 8 + 2e-15 read on the sample before) */
+    r = djl_floor(tau + 0.5);
+    if (djl_fabs(tau - r) <= 1e-9) tau = r;
+    return tau;
 }
 
 /* The profile at grid time s from the past pieces (the last that starts at or before s;

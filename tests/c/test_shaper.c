@@ -252,9 +252,9 @@ static double phase_back(double s, double ph)
     }
 }
 
-/* The expected shaped outputs at grid time s: the copies' values (right limits; a copy whose
- * time is within rounding of a sample, but not on it, may be either side there: its left
- * limit in alt[i], amb[i] = 1), and whether every copy has ended. */
+/* The expected shaped outputs at grid time s: the copies' values (right limits; a delayed copy
+ * whose time is within rounding of a sample may be either side there: its left limit in
+ * alt[i], amb[i] = 1), and whether every copy has ended. */
 static void expected(const shaper_spec *sh, double s, double Te, int by_phase, double c[8][4],
                      double alt[8][4], int amb[8], int *all_done)
 {
@@ -264,7 +264,8 @@ static void expected(const shaper_spec *sh, double s, double Te, int by_phase, d
         double si = by_phase ? phase_back(s, sh->phase[i]) : s - sh->d[i], r = floor(si + 0.5);
         long k;
         c[i][3] = alt[i][3] = Te;
-        amb[i] = si != r && fabs(si - r) < 1e-7;
+        /* a copy with a delay: its time is rounded differently here and in the FMU */
+        amb[i] = (by_phase ? sh->phase[i] != 0.0 : sh->d[i] != 0.0) && fabs(si - r) < 1e-7;
         if (amb[i]) {
             p_at(r, 0, c[i]);
             p_at(r, 1, alt[i]);
