@@ -470,8 +470,11 @@ const char *djl_shaper_memory_flaw(const djl_shaper_memory *m, const djl_shaper 
         if (e->k < -2 * DJL_MAX_MOTION_SAMPLES || e->k > 2 * DJL_MAX_MOTION_SAMPLES ||
             (i > 0 && (e->k <= PHASE(m, i - 1).k || !(e->P >= PHASE(m, i - 1).P))))
             return "the phase of f_mode is not in order";
-        if (!djl_isfinite(e->P) || !(djl_isfinite(e->rate) && e->rate > 0.0))
-            return "the phase of f_mode is not finite or its rate not > 0";
+        /* the rate of an f_mode accepted: no delay beyond the memory's window */
+        if (!djl_isfinite(e->P) || !(djl_isfinite(e->rate) && e->rate > 0.0 &&
+                                     e->rate >= 0.999999 * sh->phase_max /
+                                                    (double)DJL_MAX_SHAPER_DELAY_SAMPLES))
+            return "the phase of f_mode is not finite or its rate out of range";
     }
     return NULL;
 }
