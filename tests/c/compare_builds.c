@@ -15,7 +15,11 @@
  * saved mid-run, restored and replayed, and a serialisation round trip.
  *
  * Usage: compare_builds 2|3 OLD.so OLD_TOKEN NEW.so NEW_TOKEN [cases] [seed]
- * (build each with -DFMI_VERSION-less sources: gcc -shared -fPIC ... fmi2.c).
+ * Each build: gcc -std=c99 -O2 -fvisibility=hidden -shared -fPIC -I<its fmu_src>
+ *   -I<fmpy>/c-code <its fmu_src>/djl_*.c fmu_instance.c fmu_model.c fmi2.c (or fmi3.c);
+ * its token is DJL_INSTANTIATION_TOKEN of its djl_vars.h.  This driver links the new
+ * core (test_core.c's parameter families): gcc ... -Ifmu_src -Itests/c -I<fmpy>/c-code
+ *   tests/c/compare_builds.c fmu_src/djl_*.c -ldl -lm.  docs/generator.md gives the runs.
  */
 #define _POSIX_C_SOURCE 200809L
 #define main test_core_main /* test_core.c: its parameter families and random numbers */
