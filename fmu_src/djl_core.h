@@ -176,6 +176,12 @@ djl_status djl_plan_motion(const djl_params *p, djl_plan *plan, djl_error *err);
  * (start with 0); evaluation cost is O(1) for monotone times. */
 void djl_eval(const djl_plan *plan, double u, int32_t *cursor, djl_sample *out);
 
+/* The same, as the limit from the left at u (the piece in force just before u: its jerk,
+ * its acceleration at u; before the start, u <= 0, the rest or cruise at v0); done once
+ * u > the motion end.  Equal to djl_eval wherever the profile is continuous (x, v, and a
+ * but for AL at a step). */
+void djl_eval_left(const djl_plan *plan, double u, int32_t *cursor, djl_sample *out);
+
 /* Jerk time actually applied to stage i (0..3) in seconds (N * Te). */
 double djl_applied_jerk_time(const djl_plan *plan, int stage);
 
@@ -205,6 +211,130 @@ const char *djl_status_name(djl_status s);
 djl_status djl_check_t_start(double t_start, double start_time, djl_error *err);
 djl_status djl_start_offset(double t_start, double start_time, double Te, double *offset,
                             int *shifted, djl_error *err);
+
+/* ------------------------------------------------------------------------ */
+/* input shaping (djl_shaper.c; docs/generator.md, "Input shaping")          */
+
+/* Impulses of a custom shaper, at most. */
+#define DJL_MAX_SHAPER_IMPULSES 8
+/* Longest delay of an impulse, samples of Te: the past of the profile that the
+ * delayed copies read is kept that far back (djl_shaper_memory). */
+#define DJL_MAX_SHAPER_DELAY_SAMPLES 4096
+/* A custom shaper's amplitudes must sum to 1 within this. */
+#define DJL_SHAPER_SUM_TOLERANCE 1e-9
+/* Vibration tolerance of the EI shaper (5 %). */
+#define DJL_SHAPER_EI_VTOL 0.05
+/* Entries of each ring of djl_shaper_memory (at most one per sample of the
+ * window DJL_MAX_SHAPER_DELAY_SAMPLES + 2, and a margin). */
+#define DJL_SHAPER_RING (DJL_MAX_SHAPER_DELAY_SAMPLES + 8)
+
+typedef enum {
+    DJL_SHAPER_NONE = 0,
+    DJL_SHAPER_ZV = 1,  /* [1, K] / (1 + K) at [0, Td/2] */
+    DJL_SHAPER_ZVD = 2, /* [1, 2K, K^2] / (1 + K)^2 at [0, Td/2, Td] */
+    DJL_SHAPER_EI = 3,  /* [(1+V)/4, (1-V)/2 K, (1+V)/4 K^2] normalised, at [0, Td/2, Td] */
+    DJL_SHAPER_CUSTOM = 4
+} djl_shaper_kind;
+
+typedef enum {
+    DJL_SHAPER_SOURCE_F_SHAPER = 1, /* impulses timed for the parameter f_shaper */
+    DJL_SHAPER_SOURCE_F_MODE = 2    /* timed by the phase of the input f_mode */
+} djl_shaper_source;
+
+/* The shaper's parameters (the FMU's shaper, f_shaper, zeta_shaper, shaper_source,
+ * shaper_n, shaper_amplitude, shaper_delay). */
+typedef struct {
+    int32_t kind;    /* djl_shaper_kind */
+    int32_t source;  /* djl_shaper_source */
+    double f;        /* Hz */
+    double zeta;
+    int32_t n;       /* custom: impulses */
+    double amplitude[DJL_MAX_SHAPER_IMPULSES];
+    double delay[DJL_MAX_SHAPER_IMPULSES]; /* s */
+} djl_shaper_params;
+
+/* A shaper designed from its parameters: the shaped output is
+ *   y = c_0 + sum_{i>=1} A_i (c_i - c_0),   c_i = p(t - t_i)
+ * for each of x, v, a, j (p the planned profile): the impulse 0 weighs
+ * 1 - sum_{i>=1} A_i, so that the weights sum to 1 exactly and the output
+ * rests exactly where p rests. */
+typedef struct {
+    int32_t n;        /* impulses (0: no shaping) */
+    int32_t source;   /* djl_shaper_source */
+    int32_t negative; /* 1 + the first impulse with a negative amplitude, 0 if none */
+    int32_t pad;
+    double f_design;  /* Hz: the frequency the delays t, d are for (f_shaper, or with
+                         source 2 the f_mode of the design) */
+    double A[DJL_MAX_SHAPER_IMPULSES];     /* amplitudes as designed (they sum to 1) */
+    double t[DJL_MAX_SHAPER_IMPULSES];     /* s, delays (source 2: at f_design) */
+    double d[DJL_MAX_SHAPER_IMPULSES];     /* samples of Te, t / Te */
+    double phase[DJL_MAX_SHAPER_IMPULSES]; /* source 2: periods of f_mode each copy lags */
+    double t_max, d_max;  /* the largest delay, s and samples */
+    double phase_max;     /* the largest phase, periods */
+} djl_shaper;
+
+/* The past a shaped output reads (a commanded move: each replan keeps what the
+ * delayed copies still need of the plan it replaces) and, with source 2, the
+ * phase of f_mode: two rings, entries in time order, pointer-free. */
+typedef struct {
+    int64_t k;          /* grid sample at which the piece starts */
+    double x, v, a, j;  /* the profile there (x absolute), j constant until the next entry */
+} djl_past_piece;
+
+typedef struct {
+    int64_t k;     /* grid sample from which rate applies */
+    double P;      /* periods of f_mode accumulated at k (from the first entry) */
+    double rate;   /* periods per sample, f_mode Te (> 0) */
+} djl_phase_point;
+
+typedef struct {
+    int32_t n_past, past_first;   /* live entries past[(past_first + i) % RING], i < n_past */
+    int32_t n_phase, phase_first;
+    djl_past_piece past[DJL_SHAPER_RING];
+    djl_phase_point phase[DJL_SHAPER_RING];
+} djl_shaper_memory;
+
+/* Start values: no shaper, source 1, f = 10 Hz, zeta = 0, n = 1, arrays 0. */
+void djl_shaper_params_default(djl_shaper_params *sp);
+
+/* Check the shaper's parameters and design it for the sampling period Te; with
+ * source 2 the delays t, d are those at f_mode (a constant f_mode: what
+ * motion_time reports).  Parameters a kind does not use are not checked (kind 0
+ * checks nothing else).  DJL_E_PARAM naming the parameter (or the input f_mode)
+ * and its value; *out untouched on error. */
+djl_status djl_shaper_design(const djl_shaper_params *sp, double Te, double f_mode,
+                             djl_shaper *out, djl_error *err);
+
+/* The shaped sample at u (samples of the plan, the plan starting at grid sample
+ * offset): x, v, a, j of the shaped profile, done once every copy has ended;
+ * x_AL, v_AL, a_AL, segment and stage those of the plan at u (djl_eval with
+ * *cursor).  A copy at u - d_i < 0 with past pieces in mem reads them (the plan
+ * then starts at a replan); mem may be NULL (a planned motion: the plan holds
+ * every time).  left: limits from the left (djl_eval_left).  cursors: one hint
+ * per impulse.  sh->n == 0: djl_eval (djl_eval_left) itself. */
+void djl_shaper_eval(const djl_shaper *sh, const djl_plan *plan, double u, double offset,
+                     const djl_shaper_memory *mem, int left, int32_t *cursor,
+                     int32_t cursors[DJL_MAX_SHAPER_IMPULSES], djl_sample *out);
+
+/* Motion time of the shaped output, s: the plan's, plus the largest delay. */
+double djl_shaper_motion_time(const djl_plan *plan, const djl_shaper *sh);
+
+/* Empty both rings. */
+void djl_shaper_memory_clear(djl_shaper_memory *mem);
+
+/* Before old (starting at grid sample offset) is replaced by a plan starting at its
+ * sample o (whole): keep its pieces over [o - DJL_MAX_SHAPER_DELAY_SAMPLES - 2, o) not
+ * kept yet.  Returns what djl_shaper_undo needs to take them back (the replan failed). */
+int64_t djl_shaper_keep_past(djl_shaper_memory *mem, const djl_plan *old, double offset,
+                             double o);
+void djl_shaper_undo(djl_shaper_memory *mem, int64_t token);
+
+/* Source 2: f_mode read at grid time s (samples) gives the phase rate (f_mode Te,
+ * periods per sample) from the first sample at or after s on. */
+void djl_shaper_phase_rate(djl_shaper_memory *mem, double s, double rate);
+
+/* Structure of a memory (an FMU state's): NULL if sound, else why not. */
+const char *djl_shaper_memory_flaw(const djl_shaper_memory *mem, const djl_shaper *sh);
 
 /* ------------------------------------------------------------------------ */
 /* replanning a move in progress (djl_replan.c)                              */

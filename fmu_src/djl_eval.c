@@ -1,6 +1,7 @@
 /*
  * djl_eval.c -- a sample of a plan: djl_eval evaluates the piece in force at
- * a time (in samples, possibly fractional), and the plan's durations; where
+ * a time (in samples, possibly fractional; djl_eval_left its limit from the
+ * left), and the plan's durations; where
  * the motion starts on a generator's sample grid (djl_start_offset).
  */
 #include "djl_internal.h"
@@ -42,6 +43,45 @@ void djl_eval(const djl_plan *pl, double u, int32_t *cursor, djl_sample *o)
     o->v_al = pc->v_al + s * pc->a_al;
     o->a_al = pc->a_al;
     o->done = u >= (double)pl->k_end;
+    o->segment = pc->seg;
+    o->stage = pc->stage;
+}
+
+void djl_eval_left(const djl_plan *pl, double u, int32_t *cursor, djl_sample *o)
+{
+    const djl_params *p = &pl->p;
+    int32_t i = cursor ? *cursor : 0;
+    const djl_piece *pc;
+    double s;
+    if (!(u > 0.0)) { /* up to the start (its limit at 0 from the left): at v0 */
+        s = u * p->Te;
+        o->x = p->x0 + p->v0 * s;
+        o->v = p->v0;
+        o->a = 0.0;
+        o->j = 0.0;
+        o->x_al = o->x;
+        o->v_al = p->v0;
+        o->a_al = 0.0;
+        o->done = 0;
+        o->segment = 0;
+        o->stage = 0;
+        return;
+    }
+    /* the last piece that starts before u */
+    if (i < 0 || i >= pl->n_pieces) i = 0;
+    while (i + 1 < pl->n_pieces && u > (double)pl->piece[i + 1].k) i++;
+    while (i > 0 && !(u > (double)pl->piece[i].k)) i--;
+    if (cursor) *cursor = i;
+    pc = &pl->piece[i];
+    s = (u - (double)pc->k) * p->Te;
+    o->x = p->x0 + (pc->x + s * (pc->v + s * (0.5 * pc->a + s * pc->j / 6.0)));
+    o->v = pc->v + s * (pc->a + 0.5 * s * pc->j);
+    o->a = pc->a + s * pc->j;
+    o->j = pc->j;
+    o->x_al = p->x0 + (pc->x_al + s * (pc->v_al + 0.5 * s * pc->a_al));
+    o->v_al = pc->v_al + s * pc->a_al;
+    o->a_al = pc->a_al;
+    o->done = u > (double)pl->k_end;
     o->segment = pc->seg;
     o->stage = pc->stage;
 }

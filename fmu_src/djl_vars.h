@@ -4,7 +4,7 @@
 #define DJL_VARS_H
 
 #define DJL_MODEL_IDENTIFIER "JerkLimitedTrajectory"
-#define DJL_INSTANTIATION_TOKEN "{17a40c1a-f0fa-5aba-a3fa-f34554b792b3}"
+#define DJL_INSTANTIATION_TOKEN "{4c695762-9bae-5c1c-ac54-404f2fc762d4}"
 #define DJL_VARS_MAX_SEGMENTS 32
 
 /* value references (arrays: first element; element i at base + i) */
@@ -52,6 +52,13 @@ typedef enum {
     VR_D_REACHED = 47,
     VR_SEG_DISTANCE = 100,
     VR_SEG_V_END = 200,
+    VR_SHAPER = 60,
+    VR_F_SHAPER = 61,
+    VR_ZETA_SHAPER = 62,
+    VR_SHAPER_SOURCE = 63,
+    VR_SHAPER_N = 64,
+    VR_SHAPER_AMPLITUDE = 300,
+    VR_SHAPER_DELAY = 400,
 } djl_vr;
 
 /* log categories, in modelDescription order */
@@ -79,6 +86,19 @@ typedef enum {
     JERK_SOURCE_F_MODE = 2,
     JERK_SOURCE_F_MODE_AHEAD = 3,
 } djl_enum_jerk_source;
+
+typedef enum {
+    SHAPER_NONE = 0,
+    SHAPER_ZV = 1,
+    SHAPER_ZVD = 2,
+    SHAPER_EI = 3,
+    SHAPER_CUSTOM = 4,
+} djl_enum_shaper;
+
+typedef enum {
+    SHAPER_SOURCE_F_SHAPER = 1,
+    SHAPER_SOURCE_F_MODE = 2,
+} djl_enum_shaper_source;
 
 #ifdef DJL_VARS_TABLES
 /* Variable table: FMI 2 element value reference = vr + index (arrays). */
@@ -136,8 +156,15 @@ static const djl_var_info djl_var_table[] = {
     {47u, 'R', 'c', 1, "d_reached"},
     {100u, 'R', 'p', 32, "seg_distance"},
     {200u, 'R', 'p', 32, "seg_v_end"},
+    {60u, 'E', 'p', 1, "shaper"},
+    {61u, 'R', 'p', 1, "f_shaper"},
+    {62u, 'R', 'p', 1, "zeta_shaper"},
+    {63u, 'E', 'p', 1, "shaper_source"},
+    {64u, 'I', 'p', 1, "shaper_n"},
+    {300u, 'R', 'p', 8, "shaper_amplitude"},
+    {400u, 'R', 'p', 8, "shaper_delay"},
 };
-#define DJL_N_VARS 43
+#define DJL_N_VARS 50
 
 static const char *const djl_log_category_names[] = {
     "logEvents",
@@ -152,12 +179,14 @@ static const char *const djl_log_category_names[] = {
 
 #include "djl_core.h"
 
-/* Where a parameter is stored: a field of djl_params (djl_core.h), or beside it
- * (a parameter the core does not take; each user of the table keeps its own). */
+/* Where a parameter is stored: a field of djl_params (djl_core.h), a field of
+ * another struct of the core (the input shaper's), or beside them (a parameter the
+ * core does not take); each user of the table keeps its own. */
 typedef enum {
     DJL_HOME_PARAMS = 0,
     DJL_HOME_JERK_SOURCE = 1,
     DJL_HOME_T_START = 2,
+    DJL_HOME_SHAPER = 3,
 } djl_param_home;
 
 /* Parameter table: element i of an array at offset + i * sizeof(double). */
@@ -167,7 +196,8 @@ typedef struct {
     char type;           /* 'R' double; 'I' Integer and 'E' Enumeration: int32_t */
     unsigned short size; /* elements */
     unsigned char home;  /* djl_param_home */
-    size_t offset;       /* DJL_HOME_PARAMS: offset of the field in djl_params */
+    size_t offset;       /* DJL_HOME_PARAMS: offset of the field in djl_params;
+                            DJL_HOME_SHAPER: in djl_shaper_params */
 } djl_param_info;
 
 static const djl_param_info djl_param_table[] = {
@@ -190,11 +220,18 @@ static const djl_param_info djl_param_table[] = {
     {VR_JERK_SOURCE, "jerk_source", 'E', 1, DJL_HOME_JERK_SOURCE, 0},
     {VR_SEG_DISTANCE, "seg_distance", 'R', 32, DJL_HOME_PARAMS, offsetof(djl_params, seg_distance)},
     {VR_SEG_V_END, "seg_v_end", 'R', 32, DJL_HOME_PARAMS, offsetof(djl_params, seg_v_end)},
+    {VR_SHAPER, "shaper", 'E', 1, DJL_HOME_SHAPER, offsetof(djl_shaper_params, kind)},
+    {VR_F_SHAPER, "f_shaper", 'R', 1, DJL_HOME_SHAPER, offsetof(djl_shaper_params, f)},
+    {VR_ZETA_SHAPER, "zeta_shaper", 'R', 1, DJL_HOME_SHAPER, offsetof(djl_shaper_params, zeta)},
+    {VR_SHAPER_SOURCE, "shaper_source", 'E', 1, DJL_HOME_SHAPER, offsetof(djl_shaper_params, source)},
+    {VR_SHAPER_N, "shaper_n", 'I', 1, DJL_HOME_SHAPER, offsetof(djl_shaper_params, n)},
+    {VR_SHAPER_AMPLITUDE, "shaper_amplitude", 'R', 8, DJL_HOME_SHAPER, offsetof(djl_shaper_params, amplitude)},
+    {VR_SHAPER_DELAY, "shaper_delay", 'R', 8, DJL_HOME_SHAPER, offsetof(djl_shaper_params, delay)},
 };
-#define DJL_N_PARAMS 19
+#define DJL_N_PARAMS 26
 
-/* Compile-time checks: each field of djl_params has its parameter's type and size, and
- * the enumeration codes are the core's. */
+/* Compile-time checks: each field has its parameter's type and size, and the
+ * enumeration codes are the core's. */
 typedef char djl_param_table_check[(
     sizeof(((djl_params *)0)->profile) == 1 * sizeof(int32_t) &&
     sizeof(((djl_params *)0)->Te) == 1 * sizeof(double) &&
@@ -212,18 +249,34 @@ typedef char djl_param_table_check[(
     sizeof(((djl_params *)0)->short_stage) == 1 * sizeof(int32_t) &&
     sizeof(((djl_params *)0)->n_segments) == 1 * sizeof(int32_t) &&
     sizeof(((djl_params *)0)->seg_distance) == 32 * sizeof(double) &&
-    sizeof(((djl_params *)0)->seg_v_end) == 32 * sizeof(double)
+    sizeof(((djl_params *)0)->seg_v_end) == 32 * sizeof(double) &&
+    sizeof(((djl_shaper_params *)0)->kind) == 1 * sizeof(int32_t) &&
+    sizeof(((djl_shaper_params *)0)->f) == 1 * sizeof(double) &&
+    sizeof(((djl_shaper_params *)0)->zeta) == 1 * sizeof(double) &&
+    sizeof(((djl_shaper_params *)0)->source) == 1 * sizeof(int32_t) &&
+    sizeof(((djl_shaper_params *)0)->n) == 1 * sizeof(int32_t) &&
+    sizeof(((djl_shaper_params *)0)->amplitude) == 8 * sizeof(double) &&
+    sizeof(((djl_shaper_params *)0)->delay) == 8 * sizeof(double)
     ) ? 1 : -1];
 typedef char djl_enum_check[((int)PROFILE_AL == (int)DJL_PROFILE_AL &&
     (int)PROFILE_JL == (int)DJL_PROFILE_JL &&
     (int)PROFILE_DJL == (int)DJL_PROFILE_DJL &&
     (int)SHORT_STAGE_STRETCH == (int)DJL_SHORT_STRETCH &&
-    (int)SHORT_STAGE_OVERLAP == (int)DJL_SHORT_OVERLAP) ? 1 : -1];
+    (int)SHORT_STAGE_OVERLAP == (int)DJL_SHORT_OVERLAP &&
+    (int)SHAPER_NONE == (int)DJL_SHAPER_NONE &&
+    (int)SHAPER_ZV == (int)DJL_SHAPER_ZV &&
+    (int)SHAPER_ZVD == (int)DJL_SHAPER_ZVD &&
+    (int)SHAPER_EI == (int)DJL_SHAPER_EI &&
+    (int)SHAPER_CUSTOM == (int)DJL_SHAPER_CUSTOM &&
+    (int)SHAPER_SOURCE_F_SHAPER == (int)DJL_SHAPER_SOURCE_F_SHAPER &&
+    (int)SHAPER_SOURCE_F_MODE == (int)DJL_SHAPER_SOURCE_F_MODE) ? 1 : -1];
 
 /* item names by value ("" where no item has the value) */
 static const char *const djl_profile_names[] = {"", "AL", "JL", "DJL"};
 static const char *const djl_short_stage_names[] = {"", "stretch", "overlap"};
 static const char *const djl_jerk_source_names[] = {"", "parameters", "f_mode", "f_mode_ahead"};
+static const char *const djl_shaper_names[] = {"none", "ZV", "ZVD", "EI", "custom"};
+static const char *const djl_shaper_source_names[] = {"", "f_shaper", "f_mode"};
 #endif /* DJL_VARS_PARAMETERS */
 
 #endif /* DJL_VARS_H */

@@ -24,6 +24,7 @@ void model_defaults(model_data *d)
     d->start_time = 0.0;
     d->jerk_source = JERK_SOURCE_PARAMETERS;
     d->f_mode = 10.0;
+    djl_shaper_params_default(&d->sp);
 }
 
 /* Where element index of parameter base (its value reference) is stored (djl_vars.h's
@@ -40,6 +41,7 @@ static void *param_field(model_data *d, unsigned int base, unsigned int index)
         case DJL_HOME_PARAMS: return (char *)&d->p + pi->offset + index * sizeof(double);
         case DJL_HOME_T_START: return &d->t_start;
         case DJL_HOME_JERK_SOURCE: return &d->jerk_source;
+        case DJL_HOME_SHAPER: return (char *)&d->sp + pi->offset + index * sizeof(double);
         default: return NULL;
         }
     }
@@ -60,7 +62,11 @@ static int32_t jerk_samples(double f, double Te)
 static void evaluate(model_data *d)
 {
     double u = (double)d->n - d->offset + d->phase;
-    djl_eval(&d->plan, u, &d->cursor, &d->out);
+    if (d->shaper.n == 0)
+        djl_eval(&d->plan, u, &d->cursor, &d->out);
+    else /* the shaped profile (docs/generator.md, "Input shaping") */
+        djl_shaper_eval(&d->shaper, &d->plan, u, d->offset, &d->mem, 0, &d->cursor,
+                        d->shaper_cursor, &d->out);
 }
 
 static void log_plan(const model_instance *m)
@@ -155,6 +161,63 @@ static model_status check_range(model_instance *m, const char *fn, double off)
     return ST_OK;
 }
 
+/* The input shaper of the parameters (none: nothing is checked or logged), designed for the
+ * plan just made; on failure log and go to Error (a bad f_mode, an input, is refused and
+ * the instance stays usable). */
+static model_status design_shaper(model_instance *m, const char *fn)
+{
+    model_data *d = &m->d;
+    djl_error err;
+    djl_shaper sh;
+    if (djl_shaper_design(&d->sp, d->p.Te, d->f_mode, &sh, &err) != DJL_OK) {
+        if (strcmp(err.param, "f_mode") == 0)
+            return model_refuse(m, "%s: invalid input %s (set another f_mode)", fn, err.message);
+        return model_fail(m, "%s: %s: %s", fn, djl_status_name(DJL_E_PARAM), err.message);
+    }
+    if (sh.n > 0 && !((double)d->plan.k_end + sh.d_max <= (double)DJL_MAX_MOTION_SAMPLES))
+        return model_fail(m, "%s: invalid parameter shaper = %d: the motion of %lld samples and "
+                          "the shaper's last impulse, %g samples later, exceed the %g samples a "
+                          "motion may take", fn, (int)d->sp.kind, (long long)d->plan.k_end,
+                          sh.d_max, (double)DJL_MAX_MOTION_SAMPLES);
+    d->shaper = sh;
+    memset(d->shaper_cursor, 0, sizeof d->shaper_cursor);
+    djl_shaper_memory_clear(&d->mem);
+    if (sh.n > 0 && sh.source == DJL_SHAPER_SOURCE_F_MODE)
+        djl_shaper_phase_rate(&d->mem, (double)d->n + d->phase, d->f_mode * d->p.Te);
+    return ST_OK;
+}
+
+static void log_shaper(const model_instance *m)
+{
+    const model_data *d = &m->d;
+    const djl_shaper *sh = &d->shaper;
+    char amp[256], del[256];
+    size_t la = 0, ld = 0;
+    int i;
+    if (sh->n == 0) return;
+    for (i = 0; i < sh->n; i++) {
+        la += (size_t)snprintf(amp + la, sizeof amp - la, "%s%.17g", i ? ", " : "", sh->A[i]);
+        if (la >= sizeof amp) la = sizeof amp - 1;
+        ld += (size_t)snprintf(del + ld, sizeof del - ld, "%s%.17g", i ? ", " : "", sh->t[i]);
+        if (ld >= sizeof del) ld = sizeof del - 1;
+    }
+    model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
+              "input shaper %s, %s: amplitudes [%s] at delays [%s] s%s; the output ends %.17g s "
+              "after the planned motion (motion_time = %.17g s)",
+              djl_shaper_names[d->sp.kind],
+              sh->source == DJL_SHAPER_SOURCE_F_MODE ? "timed by the phase of f_mode (delays "
+                                                       "at the f_mode of now)"
+                                                     : "timed for f_shaper",
+              amp, del, d->sp.kind == DJL_SHAPER_CUSTOM ? "" : " (the textbook design)",
+              sh->t_max, djl_shaper_motion_time(&d->plan, sh));
+    if (sh->negative)
+        model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
+                  "shaper_amplitude[%d] = %.17g is negative: the shaped output still lands "
+                  "exactly, but it may exceed v_max, a_max, d_max and the planned jerk (they "
+                  "hold when every amplitude is >= 0)", (int)sh->negative,
+                  sh->A[sh->negative - 1]);
+}
+
 /* Plan for the current parameters if needed; on failure log and go to Error. */
 static model_status ensure_plan(model_instance *m, const char *fn)
 {
@@ -207,6 +270,7 @@ static model_status ensure_plan(model_instance *m, const char *fn)
                   "Te = %.17g s): the motion starts at the next sample, %.17g s", d->t_start,
                   d->start_time, d->p.Te, d->start_time + off * d->p.Te);
     if ((st2 = check_range(m, fn, off)) != ST_OK) return st2;
+    if ((st2 = design_shaper(m, fn)) != ST_OK) return st2;
     d->offset = off;
     d->cursor = 0;
     d->planned = 1;
@@ -218,6 +282,7 @@ static model_status ensure_plan(model_instance *m, const char *fn)
     d->first.d_reached = d->plan.d_reached;
     evaluate(d);
     log_plan(m);
+    log_shaper(m);
     return ST_OK;
 }
 
@@ -243,6 +308,17 @@ static model_status set_input(model_instance *m, const model_var *v, double valu
             return model_refuse(m, "set: invalid input f_mode = %g Hz: its period, %g s, is "
                                 "outside [Te/2, %d Te] at Te = %g s (the previous value, %g Hz, "
                                 "is kept)", value, 1.0 / value, DJL_MAX_FILTER_SAMPLES, d->p.Te,
+                                d->f_mode);
+        if (d->planned && d->shaper.n > 0 && d->shaper.source == DJL_SHAPER_SOURCE_F_MODE &&
+            !(d->shaper.phase_max / (value * d->p.Te) <= (double)DJL_MAX_SHAPER_DELAY_SAMPLES))
+            return model_refuse(m, "set: invalid input f_mode = %g Hz: with shaper_source = 2 the "
+                                "shaper's last impulse would be %g samples of Te = %g s late, "
+                                "more than the %d samples of the profile's past the FMU keeps "
+                                "(f_mode must be at least %.17g Hz; the previous value, %g Hz, "
+                                "is kept)", value, d->shaper.phase_max / (value * d->p.Te),
+                                d->p.Te, DJL_MAX_SHAPER_DELAY_SAMPLES,
+                                d->shaper.phase_max /
+                                    ((double)DJL_MAX_SHAPER_DELAY_SAMPLES * d->p.Te),
                                 d->f_mode);
         d->f_mode = value;
         return ST_OK;
@@ -366,7 +442,10 @@ model_status model_get(model_instance *m, unsigned int vr, char type, double *va
     case VR_SEGMENT: *value = (double)d->out.segment; break;
     case VR_BUSY: *value = d->out.done ? 0.0 : 1.0; break;
     case VR_STAGE: *value = (double)d->out.stage; break;
-    case VR_MOTION_TIME: *value = (double)d->first.k_end * d->p.Te; break;
+    case VR_MOTION_TIME: /* with a shaper: until its last delayed copy ends */
+        *value = (double)d->first.k_end * d->p.Te;
+        if (d->shaper.n > 0) *value += d->shaper.t_max;
+        break;
     case VR_N_F1: *value = (double)d->first.N[0]; break;
     case VR_N_F2: *value = (double)d->first.N[1]; break;
     case VR_N_F3: *value = (double)d->first.N[2]; break;
@@ -426,6 +505,7 @@ static void replanned(model_instance *m, double t, const djl_goal *g,
     model_data *d = &m->d;
     d->offset += (double)info->origin;
     d->cursor = 0;
+    memset(d->shaper_cursor, 0, sizeof d->shaper_cursor);
     d->replans++;
     model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
               "t = %.17g s: %s: replanned from sample %lld (%s; stage ending at sample %lld, "
@@ -441,6 +521,13 @@ static void replanned(model_instance *m, double t, const djl_goal *g,
                   d->p.v_max);
 }
 
+/* With a shaper, before the plan is replaced by one starting at its sample floor(u): the
+ * memory keeps what the delayed copies still read of it (undone if the replan fails). */
+static int64_t keep_past(model_data *d, double u)
+{
+    return djl_shaper_keep_past(&d->mem, &d->plan, d->offset, djl_floor(u));
+}
+
 /* The plan replaced by djl_replan at u (samples of the current plan), towards g. */
 static model_status replan_at(model_instance *m, double t, double u, const djl_goal *g,
                               const char *why)
@@ -448,10 +535,14 @@ static model_status replan_at(model_instance *m, double t, double u, const djl_g
     model_data *d = &m->d;
     djl_replan_info info;
     djl_error err;
-    djl_status st = djl_replan(&d->plan, u, g, &d->plan, &m->w.scratch, &info, &err);
-    if (st != DJL_OK)
+    djl_status st;
+    int64_t kept = d->shaper.n > 0 ? keep_past(d, u) : 0;
+    st = djl_replan(&d->plan, u, g, &d->plan, &m->w.scratch, &info, &err);
+    if (st != DJL_OK) {
+        if (d->shaper.n > 0) djl_shaper_undo(&d->mem, kept);
         return model_refuse(m, "DoStep at t = %.17g s: %s: %s: %s (nothing was done)", t, why,
                             djl_status_name(st), err.message);
+    }
     replanned(m, t, g, &info, why);
     return ST_OK;
 }
@@ -521,6 +612,7 @@ static model_status commands(model_instance *m, double t, double u0, double du)
     double u_end = u0 + du, from, at;
     djl_goal g;
     int i, it, now;
+    int64_t kept;
     memset(&g, 0, sizeof g);
     if (d->jerk_source >= JERK_SOURCE_F_MODE) {
         int32_t Nf = jerk_samples(d->f_mode, d->p.Te);
@@ -575,7 +667,9 @@ static model_status commands(model_instance *m, double t, double u0, double du)
         djl_status st;
         double o;
         if (!djl_jerk_times_due(&d->plan, from, u_end, g.N, now, &at)) break;
+        kept = d->shaper.n > 0 ? keep_past(d, at) : 0;
         st = djl_replan(&d->plan, at, &g, &d->plan, &m->w.scratch, &info, &err);
+        if (st != DJL_OK && d->shaper.n > 0) djl_shaper_undo(&d->mem, kept);
         if (st == DJL_E_INFEASIBLE) {
             /* the jerk time of f_mode no longer lands from here without stopping and
              * coming back: the stage keeps the one it was planned with */
@@ -651,6 +745,9 @@ model_status model_do_step(model_instance *m, double t, double h)
                                    whole + phase - d->phase);
         if (st != ST_OK) return st;
     }
+    if (d->shaper.n > 0 && d->shaper.source == DJL_SHAPER_SOURCE_F_MODE)
+        /* f_mode read now times the copies from the first sample at or after now */
+        djl_shaper_phase_rate(&d->mem, (double)d->n + d->phase, d->f_mode * d->p.Te);
     n = d->n + (int64_t)whole;
     d->n = n;
     d->phase = phase;
@@ -775,9 +872,27 @@ const char *model_state_flaw(const model_data *d)
         if (pc->stage < 0 || pc->stage > 4) return "a piece's stage is out of range";
         if (!finite_all(v, 7)) return "a piece of the plan is not finite";
     }
-    /* the outputs are those of the plan at the current sample */
+    /* the shaper is the one of its parameters, its memory sound */
+    {
+        djl_shaper sh;
+        const char *why;
+        if (djl_shaper_design(&d->sp, d->p.Te, d->shaper.f_design, &sh, NULL) != DJL_OK)
+            return "its shaper's parameters are invalid";
+        if (memcmp(&sh, &d->shaper, sizeof sh) != 0)
+            return "its shaper is not the one of its parameters";
+        for (i = 0; i < DJL_MAX_SHAPER_IMPULSES; i++)
+            if (d->shaper_cursor[i] < 0 || d->shaper_cursor[i] >= pl->n_pieces)
+                return "a piece cursor of the shaper is out of range";
+        if ((why = djl_shaper_memory_flaw(&d->mem, &d->shaper)) != NULL) return why;
+    }
+    /* the outputs are those of the plan (shaped) at the current sample */
     cur = d->cursor;
-    djl_eval(pl, (double)d->n - d->offset + d->phase, &cur, &o);
+    {
+        int32_t cs[DJL_MAX_SHAPER_IMPULSES];
+        memcpy(cs, d->shaper_cursor, sizeof cs);
+        djl_shaper_eval(&d->shaper, pl, (double)d->n - d->offset + d->phase, d->offset,
+                        &d->mem, 0, &cur, cs, &o);
+    }
     if (cur != d->cursor || !same_sample(&o, &d->out))
         return "its outputs are not those of its plan at its time";
     return NULL;

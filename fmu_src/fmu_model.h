@@ -28,7 +28,7 @@
 typedef enum { ST_OK = 0, ST_WARNING = 1, ST_DISCARD = 2, ST_ERROR = 3, ST_FATAL = 4 } model_status;
 
 #define MODEL_MAGIC 0x4a4c4446u /* "FDLJ" */
-#define MODEL_LAYOUT 4u          /* of model_data: a state of another layout is refused */
+#define MODEL_LAYOUT 5u          /* of model_data: a state of another layout is refused */
 
 /* The figures of the parametric move planned at initialisation (the calculated
  * parameters motion_time, N_F1..N_F4, v_reached, a_reached, d_reached): commands
@@ -74,6 +74,13 @@ typedef struct {
     double f_rate;          /* Hz/s, f_mode's rate of change over the last step */
     int64_t replans;        /* replans made (logs) */
     plan_summary first;
+    /* input shaping (docs/generator.md, "Input shaping") */
+    djl_shaper_params sp;   /* parameters shaper, f_shaper, zeta_shaper, shaper_source, shaper_n,
+                               shaper_amplitude, shaper_delay */
+    djl_shaper shaper;      /* designed with the plan (n = 0: no shaping) */
+    int32_t shaper_cursor[DJL_MAX_SHAPER_IMPULSES]; /* piece hints of the delayed copies */
+    djl_shaper_memory mem;  /* what the delayed copies read of the plans replans replaced; the
+                               phase of f_mode (shaper_source = 2) */
 } model_data;
 
 /* The model's work space in an instance: not part of an FMU state. */

@@ -5,7 +5,8 @@
  * once per move:
  *
  *  - plan a move with the FMU's own generator core (fmu_src/djl_*.c: the
- *    very code the FMU runs, linked in, not re-implemented) and sample it on
+ *    very code the FMU runs, linked in, not re-implemented), shape it with the
+ *    FMU's input shaper (djl_shaper.c, shaper_source = 1) and sample it on
  *    the FMU's time grid (start time + n Te, the motion starting at the first
  *    sample at or after t_start: the core's djl_start_offset, which the FMU
  *    calls too); the FMU's parameters are read by name through the table the
@@ -41,6 +42,7 @@ static PyObject *PlanError; /* subclass of ValueError */
 typedef struct {
     PyObject_HEAD
     djl_plan plan;
+    djl_shaper shaper; /* the FMU's input shaper (n = 0: none), designed with the plan */
     double t_start;    /* s, requested start of the motion */
     double start_time; /* s, start of the sample grid */
     double offset;     /* samples from start_time to the motion start (integral) */
@@ -118,10 +120,11 @@ static int get_array(PyObject *v, const char *key, double *out, int n)
     return 0;
 }
 
-/* The FMU parameters the engine takes: the core's and t_start (not jerk_source: the engine
- * plans the parametric move, jerk times from the parameters). */
+/* The FMU parameters the engine takes: the core's, the input shaper's and t_start (not
+ * jerk_source: the engine plans the parametric move, jerk times from the parameters). */
 typedef struct {
     djl_params p;
+    djl_shaper_params sp;
     double t_start;
 } engine_params;
 
@@ -130,18 +133,20 @@ static void *param_field(engine_params *e, const djl_param_info *pi)
 {
     switch (pi->home) {
     case DJL_HOME_PARAMS: return (char *)&e->p + pi->offset;
+    case DJL_HOME_SHAPER: return (char *)&e->sp + pi->offset;
     case DJL_HOME_T_START: return &e->t_start;
     default: return NULL;
     }
 }
 
-/* Fill p (from the defaults) and t_start from a dict of FMU parameter names. */
-static int parse_params(PyObject *dict, djl_params *p, double *t_start)
+/* Fill p and sp (from the defaults) and t_start from a dict of FMU parameter names. */
+static int parse_params(PyObject *dict, djl_params *p, djl_shaper_params *sp, double *t_start)
 {
     PyObject *key, *value;
     Py_ssize_t pos = 0;
     engine_params e;
     djl_params_default(&e.p);
+    djl_shaper_params_default(&e.sp);
     e.t_start = 0.0;
     if (!PyDict_Check(dict)) {
         PyErr_SetString(PyExc_TypeError, "params must be a dict of FMU parameter names");
@@ -174,6 +179,7 @@ static int parse_params(PyObject *dict, djl_params *p, double *t_start)
         if (rc < 0) return -1;
     }
     *p = e.p;
+    *sp = e.sp;
     *t_start = e.t_start;
     return 0;
 }
@@ -206,6 +212,19 @@ static PyObject *raise_plan_error(const djl_error *err, djl_status st)
     return NULL;
 }
 
+/* An error of the engine's own, in the core's form. */
+static djl_status set_engine_error(djl_error *err, const char *param, double value,
+                                   const char *message)
+{
+    err->status = DJL_E_PARAM;
+    strncpy(err->param, param, sizeof err->param - 1);
+    err->param[sizeof err->param - 1] = '\0';
+    err->value = value;
+    strncpy(err->message, message, sizeof err->message - 1);
+    err->message[sizeof err->message - 1] = '\0';
+    return DJL_E_PARAM;
+}
+
 /* Plan p into plan and place it on the grid of start_time (the FMU's ensure_plan, without
  * FMI): the core's status and error. */
 static djl_status plan_into(const djl_params *p, double t_start, double start_time,
@@ -216,12 +235,33 @@ static djl_status plan_into(const djl_params *p, double t_start, double start_ti
     return djl_start_offset(t_start, start_time, p->Te, offset, shifted, err);
 }
 
+/* The input shaper of sp for the plan (the FMU's design_shaper): shaper_source = 2 needs the
+ * input f_mode, which the engine does not have (PlanError naming shaper_source). */
+static djl_status shaper_into(const djl_shaper_params *sp, const djl_plan *plan, djl_shaper *sh,
+                              djl_error *err)
+{
+    djl_status st;
+    if (sp->kind != DJL_SHAPER_NONE && sp->source == DJL_SHAPER_SOURCE_F_MODE)
+        return set_engine_error(err, "shaper_source", (double)sp->source,
+                                "shaper_source = 2: the impulses are timed by the input f_mode, "
+                                "which the compiled engine does not have (it plans the "
+                                "parametric move: use shaper_source = 1, or the FMU)");
+    st = djl_shaper_design(sp, plan->p.Te, 0.0, sh, err);
+    if (st != DJL_OK) return st;
+    if (sh->n > 0 && !((double)plan->k_end + sh->d_max <= (double)DJL_MAX_MOTION_SAMPLES))
+        return set_engine_error(err, "shaper", (double)sp->kind,
+                                "invalid parameter shaper: the motion and the shaper's last "
+                                "impulse exceed the samples a motion may take");
+    return DJL_OK;
+}
+
 static PyObject *engine_plan(PyObject *self, PyObject *args, PyObject *kwds)
 {
     static char *kwlist[] = {"params", "start_time", NULL};
     PyObject *dict;
     double start_time = 0.0;
     djl_params p;
+    djl_shaper_params sp;
     djl_error err;
     djl_status st;
     PlanObject *obj;
@@ -230,13 +270,14 @@ static PyObject *engine_plan(PyObject *self, PyObject *args, PyObject *kwds)
         return NULL;
     obj = PyObject_New(PlanObject, &PlanType);
     if (!obj) return NULL;
-    if (parse_params(dict, &p, &obj->t_start) < 0) {
+    if (parse_params(dict, &p, &sp, &obj->t_start) < 0) {
         Py_DECREF(obj);
         return NULL;
     }
     obj->start_time = start_time;
     memset(&err, 0, sizeof err);
     st = plan_into(&p, obj->t_start, start_time, &obj->plan, &err, &obj->offset, &obj->shifted);
+    if (st == DJL_OK) st = shaper_into(&sp, &obj->plan, &obj->shaper, &err);
     if (st != DJL_OK) {
         Py_DECREF(obj);
         return raise_plan_error(&err, st);
@@ -273,7 +314,7 @@ static PyObject *plan_sample_into(PlanObject *self, PyObject *args)
     Py_ssize_t count, k;
     Py_buffer view;
     double *buf;
-    int32_t cursor = 0;
+    int32_t cursor = 0, cursors[DJL_MAX_SHAPER_IMPULSES] = {0};
     djl_sample s;
     if (!PyArg_ParseTuple(args, "OLLn", &out, &n0, &step, &count)) return NULL;
     if (count < 0 || step < 1) {
@@ -285,7 +326,8 @@ static PyObject *plan_sample_into(PlanObject *self, PyObject *args)
     Py_BEGIN_ALLOW_THREADS
     for (k = 0; k < count; k++) {
         double u = (double)(n0 + (long long)k * step) - self->offset;
-        djl_eval(&self->plan, u, &cursor, &s);
+        djl_shaper_eval(&self->shaper, &self->plan, u, self->offset, NULL, 0, &cursor, cursors,
+                        &s);
         buf[k] = s.x;
         buf[count + k] = s.v;
         buf[2 * count + k] = s.a;
@@ -303,18 +345,144 @@ static PyObject *plan_sample_into(PlanObject *self, PyObject *args)
 static PyObject *plan_at(PlanObject *self, PyObject *args)
 {
     double n;
-    int32_t cursor = 0;
+    int32_t cursor = 0, cursors[DJL_MAX_SHAPER_IMPULSES] = {0};
     djl_sample s;
     if (!PyArg_ParseTuple(args, "d", &n)) return NULL;
-    djl_eval(&self->plan, n - self->offset, &cursor, &s);
+    djl_shaper_eval(&self->shaper, &self->plan, n - self->offset, self->offset, NULL, 0, &cursor,
+                    cursors, &s);
     return Py_BuildValue("(dddddddii)", s.x, s.v, s.a, s.j, s.x_al, s.v_al, s.a_al, s.done,
                          s.segment);
+}
+
+/* Plan.eval(times, side="right") -> (x, v, a, j): the shaped profile at times (s, FMU time;
+ * a time within 1e-9 of a sample of the grid start_time + n Te is taken as that sample, whose
+ * values are sample_into's bit for bit), the limits from the right (side="right": the jerk
+ * over the interval that starts there) or from the left ("left": the jerk over the interval
+ * that ends there).  numpy arrays (numpy is imported, not compiled against). */
+static PyObject *plan_eval(PlanObject *self, PyObject *args, PyObject *kwds)
+{
+    static char *kwlist[] = {"times", "side", NULL};
+    PyObject *times, *np, *arr = NULL, *out = NULL, *res = NULL;
+    const char *side = "right";
+    Py_buffer bt, bo;
+    Py_ssize_t n, k;
+    int left;
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "O|s", kwlist, &times, &side)) return NULL;
+    if (strcmp(side, "right") != 0 && strcmp(side, "left") != 0) {
+        PyErr_Format(PyExc_ValueError, "side must be \"right\" or \"left\", got %R",
+                     PyTuple_GET_ITEM(args, PyTuple_GET_SIZE(args) > 1 ? 1 : 0));
+        return NULL;
+    }
+    left = side[0] == 'l';
+    np = PyImport_ImportModule("numpy"); /* deferred: the module needs no numpy headers */
+    if (!np) return NULL;
+    arr = PyObject_CallMethod(np, "ascontiguousarray", "(O)", times);
+    if (arr) {
+        PyObject *flat = PyObject_CallMethod(arr, "ravel", NULL);
+        Py_DECREF(arr);
+        arr = flat ? PyObject_CallMethod(flat, "astype", "(s)", "float64") : NULL;
+        Py_XDECREF(flat);
+    }
+    if (!arr) goto done;
+    if (get_in_buffer(arr, &bt, 0, "times") < 0) goto done;
+    n = bt.len / 8;
+    out = PyObject_CallMethod(np, "empty", "((nn))", (Py_ssize_t)4, n);
+    if (!out || get_out_buffer(out, &bo, 4 * n, "out") < 0) {
+        PyBuffer_Release(&bt);
+        goto done;
+    }
+    {
+        const double *t = bt.buf;
+        double *o = bo.buf, Te = self->plan.p.Te;
+        int32_t cursor = 0, cursors[DJL_MAX_SHAPER_IMPULSES] = {0};
+        djl_sample smp;
+        Py_BEGIN_ALLOW_THREADS
+        for (k = 0; k < n; k++) {
+            double r = (t[k] - self->start_time) / Te, rr = floor(r + 0.5);
+            if (fabs(r - rr) <= 1e-9 * (1.0 + fabs(rr))) r = rr; /* a sample of the grid */
+            djl_shaper_eval(&self->shaper, &self->plan, r - self->offset, self->offset, NULL,
+                            left, &cursor, cursors, &smp);
+            o[k] = smp.x;
+            o[n + k] = smp.v;
+            o[2 * n + k] = smp.a;
+            o[3 * n + k] = smp.j;
+        }
+        Py_END_ALLOW_THREADS
+    }
+    PyBuffer_Release(&bo);
+    PyBuffer_Release(&bt);
+    res = Py_BuildValue("(NNNN)", PySequence_GetItem(out, 0), PySequence_GetItem(out, 1),
+                        PySequence_GetItem(out, 2), PySequence_GetItem(out, 3));
+done:
+    Py_XDECREF(out);
+    Py_XDECREF(arr);
+    Py_DECREF(np);
+    return res;
+}
+
+/* Plan.breakpoints() -> list: the times (s, FMU time, sorted, each once) at which the shaped
+ * profile's jerk may change: each piece start of the plan, delayed by each impulse.  Between
+ * two of them the profile is one cubic: evaluate it inside (at the midpoint, say), where the
+ * side of a breakpoint cannot be mistaken by rounding. */
+static PyObject *plan_breakpoints(PlanObject *self, PyObject *noargs)
+{
+    PyObject *list = PyList_New(0), *uniq = NULL;
+    int32_t i, q, nq = self->shaper.n > 0 ? self->shaper.n : 1;
+    Py_ssize_t k;
+    (void)noargs;
+    if (!list) return NULL;
+    for (i = 0; i < self->plan.n_pieces; i++) {
+        for (q = 0; q < nq; q++) {
+            double d = self->shaper.n > 0 ? self->shaper.d[q] : 0.0;
+            double t = self->start_time +
+                       (self->offset + (double)self->plan.piece[i].k + d) * self->plan.p.Te;
+            PyObject *f = PyFloat_FromDouble(t);
+            if (!f || PyList_Append(list, f) < 0) {
+                Py_XDECREF(f);
+                Py_DECREF(list);
+                return NULL;
+            }
+            Py_DECREF(f);
+        }
+    }
+    if (PyList_Sort(list) < 0) {
+        Py_DECREF(list);
+        return NULL;
+    }
+    uniq = PyList_New(0);
+    for (k = 0; uniq && k < PyList_GET_SIZE(list); k++) {
+        PyObject *f = PyList_GET_ITEM(list, k);
+        if (k > 0 && PyFloat_AS_DOUBLE(f) == PyFloat_AS_DOUBLE(PyList_GET_ITEM(list, k - 1)))
+            continue;
+        if (PyList_Append(uniq, f) < 0) Py_CLEAR(uniq);
+    }
+    Py_DECREF(list);
+    return uniq;
+}
+
+static PyObject *plan_get_shaper(PlanObject *self, void *c)
+{
+    PyObject *A, *t;
+    int32_t i;
+    (void)c;
+    A = PyTuple_New(self->shaper.n);
+    t = PyTuple_New(self->shaper.n);
+    if (!A || !t) {
+        Py_XDECREF(A);
+        Py_XDECREF(t);
+        return NULL;
+    }
+    for (i = 0; i < self->shaper.n; i++) {
+        PyTuple_SET_ITEM(A, i, PyFloat_FromDouble(self->shaper.A[i]));
+        PyTuple_SET_ITEM(t, i, PyFloat_FromDouble(self->shaper.t[i]));
+    }
+    return Py_BuildValue("(NN)", A, t);
 }
 
 static PyObject *plan_get_motion_time(PlanObject *self, void *c)
 {
     (void)c;
-    return PyFloat_FromDouble(djl_motion_time(&self->plan));
+    return PyFloat_FromDouble(djl_shaper_motion_time(&self->plan, &self->shaper));
 }
 
 static PyObject *plan_get_N_F(PlanObject *self, void *c)
@@ -365,7 +533,7 @@ static PyObject *plan_residuals(PlanObject *self, PyObject *args)
     Py_buffer bf, bz, bg, bfe, bfac, bout;
     double *st;
     const double two_pi = DJL_TWO_PI;
-    int32_t cursor = 0;
+    int32_t cursor = 0, cursors[DJL_MAX_SHAPER_IMPULSES] = {0};
     int bad = 0;
     if (!PyArg_ParseTuple(args, "LndOOOOOO", &m, &k_end, &h, &of, &oz, &og, &ofe, &ofac, &oout))
         return NULL;
@@ -412,7 +580,8 @@ static PyObject *plan_residuals(PlanObject *self, PyObject *args)
         Py_BEGIN_ALLOW_THREADS
         for (k = 0; k < k_end; k++) {
             djl_sample smp;
-            djl_eval(&self->plan, (double)(k * m) - self->offset, &cursor, &smp);
+            djl_shaper_eval(&self->shaper, &self->plan, (double)(k * m) - self->offset,
+                            self->offset, NULL, 0, &cursor, cursors, &smp);
             for (q = 0; q < nf; q++) {
                 for (i = 0; i < nm; i++) {
                     double *e = &st[2 * (q * nm + i)];
@@ -470,7 +639,10 @@ f1:
 
 static PyGetSetDef plan_getset[] = {
     {"motion_time", (getter)plan_get_motion_time, NULL,
-     "Duration of the motion, filters included (s).", NULL},
+     "Duration of the motion, filters included (s); with a shaper, until its last delayed "
+     "copy ends (the FMU's motion_time).", NULL},
+    {"shaper", (getter)plan_get_shaper, NULL,
+     "The input shaper applied: (amplitudes, delays in s), both empty without one.", NULL},
     {"N_F", (getter)plan_get_N_F, NULL, "Jerk times applied, in samples (N_F1..N_F4).", NULL},
     {"v_reached", (getter)plan_get_v_reached, NULL, "Largest peak velocity (m/s).", NULL},
     {"a_reached", (getter)plan_get_a_reached, NULL, "Largest acceleration level (m/s2).", NULL},
@@ -494,6 +666,13 @@ static PyMethodDef plan_methods[] = {
     {"residuals", (PyCFunction)plan_residuals, METH_VARARGS,
      "residuals(m, k_end, h, f_mid, zeta, gain, f_end, factors, out): free-oscillation "
      "amplitude (sum over the modes) at communication point k_end, for each frequency factor."},
+    {"eval", (PyCFunction)(void (*)(void))plan_eval, METH_VARARGS | METH_KEYWORDS,
+     "eval(times, side=\"right\") -> (x, v, a, j): the (shaped) profile at times (s, FMU time; "
+     "a time within 1e-9 of a sample is that sample), limits from the right (jerk over the "
+     "interval starting there) or the left; numpy arrays."},
+    {"breakpoints", (PyCFunction)plan_breakpoints, METH_NOARGS,
+     "breakpoints() -> list: times (s) at which the shaped jerk may change (each piece start "
+     "of the plan delayed by each impulse), sorted, each once."},
     {"at", (PyCFunction)plan_at, METH_VARARGS,
      "at(n): (x, v, a, j, x_AL, v_AL, a_AL, done, segment) at FMU sample n (fractional allowed)."},
     {NULL, NULL, 0, NULL},
@@ -529,6 +708,8 @@ static PyObject *engine_motion_start(PyObject *self, PyObject *args)
 
 typedef struct {
     djl_params p;
+    djl_shaper_params sp;
+    djl_shaper shaper;
     double t_start, start_time;
     djl_plan plan; /* scratch: large, kept off the stack */
 } sync_ctx;
@@ -540,7 +721,8 @@ static djl_status time_at(sync_ctx *c, double v, double *T, djl_error *err)
     djl_status st;
     c->p.v_max = v;
     st = plan_into(&c->p, c->t_start, c->start_time, &c->plan, err, &off, &shifted);
-    if (st == DJL_OK) *T = djl_motion_time(&c->plan);
+    if (st == DJL_OK) st = shaper_into(&c->sp, &c->plan, &c->shaper, err);
+    if (st == DJL_OK) *T = djl_shaper_motion_time(&c->plan, &c->shaper);
     return st;
 }
 
@@ -562,7 +744,7 @@ static PyObject *engine_sync_velocity(PyObject *self, PyObject *args, PyObject *
         return NULL;
     c = (sync_ctx *)PyMem_Malloc(sizeof *c);
     if (!c) return PyErr_NoMemory();
-    if (parse_params(dict, &c->p, &c->t_start) < 0) {
+    if (parse_params(dict, &c->p, &c->sp, &c->t_start) < 0) {
         PyMem_Free(c);
         return NULL;
     }

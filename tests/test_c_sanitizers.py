@@ -41,6 +41,11 @@ PROGRAMS = {
     # targets, stops) and, in a third of them, jerk times from a changing f_mode; the
     # campaign of docs/generator.md runs `test_replan 20000 5` at -O2
     "test_replan": (["test_replan.c"], list(CORE), ["400", "7"]),
+    # input shaping (issue 18): 1000 random shaped motions through FMI 2 beside an unshaped
+    # instance (ZV, ZVD, EI, custom; delays on and off the grid; timed by f_shaper or by the
+    # phase of f_mode; commands, random steps, FMU states replayed), outputs against the
+    # driver's own convolution; the campaign of docs/generator.md runs `test_shaper 20000 5`
+    "test_shaper": (["test_shaper.c"], ["fmi2.c", *FMU, *CORE], ["1000", "7", "20000"]),
     # the same plans with djl_math.h and with libm: 3*10^4 random cases
     "test_plan_libm": (["test_plan_libm.c", "core_libm.c"], list(CORE), ["30000", "7"]),
 }

@@ -72,6 +72,10 @@ def test_core_capacity_matches_spec():
     assert f"#define DJL_MAX_FILTER_SAMPLES {spec.MAX_FILTER_SAMPLES}" in core
     position = re.search(r"#define DJL_MAX_POSITION (\S+)", core).group(1)
     assert float(position) == spec.MAX_POSITION
+    assert f"#define DJL_MAX_SHAPER_IMPULSES {spec.MAX_SHAPER_IMPULSES}" in core
+    assert f"#define DJL_MAX_SHAPER_DELAY_SAMPLES {spec.MAX_SHAPER_DELAY_SAMPLES}" in core
+    tol = re.search(r"#define DJL_SHAPER_SUM_TOLERANCE (\S+)", core).group(1)
+    assert float(tol) == spec.SHAPER_AMPLITUDE_TOLERANCE
     horizon = int(re.search(r"#define DJL_MAX_MOTION_SAMPLES (\d+)LL", core).group(1))
     # fmu_model.c refuses Te * DJL_MAX_MOTION_SAMPLES > DJL_MAX_POSITION: MAX_TE passes
     assert spec.MAX_TE * horizon <= spec.MAX_POSITION
@@ -95,8 +99,13 @@ def test_parameter_table_is_the_spec():
     for (c_name, name, typ, size, home, offset), var in zip(rows, spec.PARAMETERS, strict=True):
         assert var.enum == "VR_" + c_name
         assert typ == code[var.type] and int(size) == var.size
+        in_struct = [(h, struct, fields[name]) for h, (struct, fields)
+                     in codegen.C_PARAM_STRUCTS.items() if name in fields]
         if name in codegen.C_PARAM_HOMES:
             assert home == codegen.C_PARAM_HOMES[name] and offset == "0"
+        elif in_struct:
+            h, struct, field = in_struct[0]
+            assert home == h and offset == f"offsetof({struct}, {field})"
         else:
             field = codegen.C_PARAM_FIELDS.get(name, name)
             assert home == "DJL_HOME_PARAMS" and offset == f"offsetof(djl_params, {field})"
@@ -105,15 +114,19 @@ def test_parameter_table_is_the_spec():
 
 def test_enumeration_constants_are_the_spec():
     header = (fmu_src_dir() / "djl_vars.h").read_text()
-    stems = {"Profile": "PROFILE", "ShortStage": "SHORT_STAGE", "JerkSource": "JERK_SOURCE"}
+    stems = {"Profile": "PROFILE", "ShortStage": "SHORT_STAGE", "JerkSource": "JERK_SOURCE",
+             "Shaper": "SHAPER", "ShaperSource": "SHAPER_SOURCE"}
     assert set(stems) == set(spec.ENUMERATIONS)
     for name, items in spec.ENUMERATIONS.items():
         for item, value, _ in items:
             assert f"    {stems[name]}_{item.upper()} = {value},\n" in header
-        names = ", ".join(f'"{n}"' for n in [""] + [item for item, _, _ in items])
+        by_value = {value: item for item, value, _ in items}
+        names = ", ".join(f'"{by_value.get(i, "")}"' for i in range(max(by_value) + 1))
         assert f"djl_{stems[name].lower()}_names[] = {{{names}}};" in header
     # the core's own codes are checked against them at compile time
     assert "(int)PROFILE_DJL == (int)DJL_PROFILE_DJL" in header
+    assert "(int)SHAPER_CUSTOM == (int)DJL_SHAPER_CUSTOM" in header
+    assert "(int)SHAPER_SOURCE_F_MODE == (int)DJL_SHAPER_SOURCE_F_MODE" in header
 
 
 def test_profile_codes_are_derived_from_the_enumeration():

@@ -76,7 +76,9 @@ def test_model_description_declares_capabilities(fmus, version):
              for t in md.typeDefinitions if t.type == "Enumeration"}
     assert items == {"Profile": [("AL", 1), ("JL", 2), ("DJL", 3)],
                      "ShortStage": [("stretch", 1), ("overlap", 2)],
-                     "JerkSource": [("parameters", 1), ("f_mode", 2), ("f_mode_ahead", 3)]}
+                     "JerkSource": [("parameters", 1), ("f_mode", 2), ("f_mode_ahead", 3)],
+                     "Shaper": [("none", 0), ("ZV", 1), ("ZVD", 2), ("EI", 3), ("custom", 4)],
+                     "ShaperSource": [("f_shaper", 1), ("f_mode", 2)]}
     assert by["profile"].declaredType.name == "Profile"
     display = {u.name: {d.name: d.factor for d in u.displayUnits} for u in md.unitDefinitions}
     quantity = {"m": ("Position", "mm"), "m/s": ("Velocity", "mm/s"),
@@ -86,6 +88,9 @@ def test_model_description_declares_capabilities(fmus, version):
         if v.type in ("Real", "Float64") and v.causality != "independent":
             if v.unit == "Hz":  # f_mode: a frequency, displayed in Hz
                 assert v.declaredType.quantity == "Frequency", v.name
+                continue
+            if v.unit is None:  # dimensionless: zeta_shaper, shaper_amplitude
+                assert v.name.startswith(("zeta_shaper", "shaper_amplitude")), v.name
                 continue
             q, disp = quantity[v.unit]
             assert v.declaredType is not None and v.declaredType.quantity == q, v.name

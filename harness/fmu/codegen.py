@@ -20,8 +20,9 @@ from . import spec
 from .spec import VARIABLES, Variable
 
 # the generator core (map in docs/generator.md): parameter checks, one segment (stages
-# sized, landing solved), a motion of segments, evaluation of samples
-CORE_SOURCES = ("djl_validate.c", "djl_segment.c", "djl_motion.c", "djl_replan.c", "djl_eval.c")
+# sized, landing solved), a motion of segments, evaluation of samples, input shaping
+CORE_SOURCES = ("djl_validate.c", "djl_segment.c", "djl_motion.c", "djl_replan.c", "djl_eval.c",
+                "djl_shaper.c")
 # the FMU, independent of the FMI version: the instance (state machine, logging, checks,
 # FMU state) and the model (its variables, planning, DoStep, commands)
 FMU_SOURCES = ("fmu_instance.c", "fmu_model.c")
@@ -38,8 +39,25 @@ exists and has the parameter's type and size)."""
 
 C_PARAM_HOMES: dict[str, str] = {"t_start": "DJL_HOME_T_START",
                                  "jerk_source": "DJL_HOME_JERK_SOURCE"}
-"""Parameters the core does not take: stored beside ``djl_params`` by each user of the table
-(the FMU's ``model_data``, the extension module's parameters)."""
+"""Parameters the core's planner does not take: stored beside ``djl_params`` by each user of
+the table (the FMU's ``model_data``, the extension module's parameters)."""
+
+C_PARAM_STRUCTS: dict[str, tuple[str, dict[str, str]]] = {
+    "DJL_HOME_SHAPER": ("djl_shaper_params", {
+        "shaper": "kind", "f_shaper": "f", "zeta_shaper": "zeta", "shaper_source": "source",
+        "shaper_n": "n", "shaper_amplitude": "amplitude", "shaper_delay": "delay"}),
+}
+"""Parameters stored in another struct of the core than ``djl_params`` (home: the struct and,
+for each parameter, its field): the input shaper's (``djl_shaper_params``, ``djl_core.h``),
+which each user of the table keeps beside its ``djl_params``."""
+
+
+def _struct_home(name: str) -> tuple[str, str, str] | None:
+    """(home, struct, field) of a parameter stored in one of :data:`C_PARAM_STRUCTS`."""
+    for home, (struct, fields) in C_PARAM_STRUCTS.items():
+        if name in fields:
+            return home, struct, fields[name]
+    return None
 
 DESCRIPTION = (
     "Sampled acceleration-limited (AL), jerk-limited (JL) and dissociated jerk-limited (DJL) "
@@ -147,7 +165,8 @@ def _c_stem(name: str) -> str:
     return "".join("_" + c if c.isupper() and i else c for i, c in enumerate(name)).upper()
 
 
-_CORE_ENUM_PREFIX = {"Profile": "DJL_PROFILE_", "ShortStage": "DJL_SHORT_"}
+_CORE_ENUM_PREFIX = {"Profile": "DJL_PROFILE_", "ShortStage": "DJL_SHORT_",
+                     "Shaper": "DJL_SHAPER_", "ShaperSource": "DJL_SHAPER_SOURCE_"}
 """The core's own constants (``djl_core.h``) for an enumeration's items, when it has them."""
 
 
@@ -173,7 +192,13 @@ def _c_parameter_table() -> list[str]:
             raise ValueError(f"{v.name}: no C storage for a {v.type} parameter")
         code, c_type = ctype[v.type]
         home = C_PARAM_HOMES.get(v.name)
-        if home is None:
+        in_struct = _struct_home(v.name)
+        if in_struct is not None:
+            shome, struct, field = in_struct
+            rows.append(f"    {{{v.enum}, \"{v.name}\", '{code}', {v.size}, {shome}, "
+                        f"offsetof({struct}, {field})}},")
+            checks.append(f"    sizeof((({struct} *)0)->{field}) == {v.size} * sizeof({c_type})")
+        elif home is None:
             field = C_PARAM_FIELDS.get(v.name, v.name)
             rows.append(f"    {{{v.enum}, \"{v.name}\", '{code}', {v.size}, DJL_HOME_PARAMS, "
                         f"offsetof(djl_params, {field})}},")
@@ -189,12 +214,13 @@ def _c_parameter_table() -> list[str]:
         "",
         '#include "djl_core.h"',
         "",
-        "/* Where a parameter is stored: a field of djl_params (djl_core.h), or beside it",
-        " * (a parameter the core does not take; each user of the table keeps its own). */",
+        "/* Where a parameter is stored: a field of djl_params (djl_core.h), a field of",
+        " * another struct of the core (the input shaper's), or beside them (a parameter the",
+        " * core does not take); each user of the table keeps its own. */",
         "typedef enum {",
         "    DJL_HOME_PARAMS = 0,",
     ]
-    homes = sorted(set(C_PARAM_HOMES.values()))
+    homes = sorted(set(C_PARAM_HOMES.values())) + list(C_PARAM_STRUCTS)
     for i, home in enumerate(homes):
         lines.append(f"    {home} = {i + 1},")
     lines += [
@@ -207,7 +233,8 @@ def _c_parameter_table() -> list[str]:
         "    char type;           /* 'R' double; 'I' Integer and 'E' Enumeration: int32_t */",
         "    unsigned short size; /* elements */",
         "    unsigned char home;  /* djl_param_home */",
-        "    size_t offset;       /* DJL_HOME_PARAMS: offset of the field in djl_params */",
+        "    size_t offset;       /* DJL_HOME_PARAMS: offset of the field in djl_params;",
+        "                            DJL_HOME_SHAPER: in djl_shaper_params */",
         "} djl_param_info;",
         "",
         "static const djl_param_info djl_param_table[] = {",
@@ -215,8 +242,8 @@ def _c_parameter_table() -> list[str]:
         "};",
         f"#define DJL_N_PARAMS {len(rows)}",
         "",
-        "/* Compile-time checks: each field of djl_params has its parameter's type and size, and",
-        " * the enumeration codes are the core's. */",
+        "/* Compile-time checks: each field has its parameter's type and size, and the",
+        " * enumeration codes are the core's. */",
         "typedef char djl_param_table_check[(",
         " &&\n".join(checks),
         "    ) ? 1 : -1];",

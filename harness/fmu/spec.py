@@ -89,6 +89,19 @@ ENUMERATIONS: dict[str, tuple[tuple[str, int, str], ...]] = {
                             "the stages still to come, so that the deceleration is placed "
                             "for the jerk times it will have"),
     ),
+    "Shaper": (
+        ("none", 0, "no input shaping: the outputs are the planned profile"),
+        ("ZV", 1, "zero vibration: 2 impulses [1, K]/(1+K) at [0, Td/2]"),
+        ("ZVD", 2, "zero vibration and derivative: 3 impulses [1, 2K, K^2]/(1+K)^2 at "
+                   "[0, Td/2, Td]"),
+        ("EI", 3, "extra-insensitive, 5 % vibration tolerance: 3 impulses at [0, Td/2, Td]"),
+        ("custom", 4, "shaper_n impulses shaper_amplitude[i] at shaper_delay[i]"),
+    ),
+    "ShaperSource": (
+        ("f_shaper", 1, "the impulses are timed for the parameter f_shaper"),
+        ("f_mode", 2, "each impulse is timed by the phase of the input f_mode accumulated "
+                      "since the profile's instant it copies (time-varying shaper)"),
+    ),
 }
 """Enumeration types: items (name, value, description).  FMI 2 sets them with
 ``fmi2SetInteger``, FMI 3 with ``fmi3SetInt64`` (the FMU also takes ``fmi3SetInt32``)."""
@@ -108,6 +121,16 @@ MAX_TE = 1e285
 
 MAX_FILTER_SAMPLES = 100000000
 """Longest jerk time in samples (``DJL_MAX_FILTER_SAMPLES``)."""
+
+MAX_SHAPER_IMPULSES = 8
+"""Capacity of the custom shaper's arrays (``DJL_MAX_SHAPER_IMPULSES`` in ``djl_core.h``)."""
+
+MAX_SHAPER_DELAY_SAMPLES = 4096
+"""Longest delay of an input shaper's impulse, in samples of ``Te``
+(``DJL_MAX_SHAPER_DELAY_SAMPLES``): the FMU state keeps that much of the profile's past."""
+
+SHAPER_AMPLITUDE_TOLERANCE = 1e-9
+"""A custom shaper's amplitudes must sum to 1 within this (``DJL_SHAPER_SUM_TOLERANCE``)."""
 
 
 @dataclass(frozen=True)
@@ -211,7 +234,8 @@ VARIABLES: tuple[Variable, ...] = (
     _o("a", 15, "Real", "Reference acceleration", "m/s2", variability="continuous"),
     _o("j", 16, "Real", "Reference jerk over the sample interval that contains now (0 for AL)",
        "m/s3"),
-    _o("done", 17, "Boolean", "True once the motion, filters included, has ended"),
+    _o("done", 17, "Boolean", "True once the motion, filters included, has ended "
+       "(with a shaper: its last delayed copy)"),
     # --- extensions -----------------------------------------------------------
     _p("v0", 20, "Real", 0.0, "Start velocity (the axis moves at v0 before t_start)", "m/s"),
     _p("v_e", 21, "Real", 0.0, "End velocity of a single-segment move (n_segments = 0)", "m/s"),
@@ -248,10 +272,11 @@ VARIABLES: tuple[Variable, ...] = (
     _i("stop", 52, "Boolean", False, "Rising edge: come to rest with d_max and the stages' jerk "
        "times (wins over execute at the same step); the axis then waits for execute"),
     _i("f_mode", 53, "Real", 10.0, "Frequency of the vibration mode, used when jerk_source = 2 "
-       "(its period is the jerk time of the stages that start)", "Hz", variability="continuous",
-       positive=True),
+       "(its period is the jerk time of the stages that start) and when shaper_source = 2 (its "
+       "phase times the shaper's impulses)", "Hz", variability="continuous", positive=True),
     _c("motion_time", 40, "Real", "Duration of the motion, filters included (ends at "
-       "t_start + motion_time)", "s"),
+       "t_start + motion_time); with a shaper, until its last delayed copy ends (the "
+       "shaper's largest delay added)", "s"),
     _c("N_F1", 41, "Integer", "Jerk time of stage 1 in samples, round(T_F1/Te) (0 for AL)",
        min=0, max=MAX_FILTER_SAMPLES),
     _c("N_F2", 42, "Integer", "Jerk time of stage 2 in samples (JL: N_F1)", min=0,
@@ -270,6 +295,29 @@ VARIABLES: tuple[Variable, ...] = (
        min=-MAX_POSITION, max=MAX_POSITION),
     _p("seg_v_end", 200, "Real", 0.0, "Velocity at the end of each segment (the last one is the "
        "end velocity of the motion)", "m/s", size=MAX_SEGMENTS),
+    # --- input shaping (issue #18) ----------------------------------------------
+    _p("shaper", 60, "Enumeration", 0, "Input shaper applied to the planned profile p: x, v, a, j "
+       "become sum A_i p(t - t_i) (x_AL, v_AL, a_AL, segment and stage stay those of p): 0 = "
+       "none, 1 = ZV, 2 = ZVD, 3 = EI (5 % tolerance), 4 = custom (shaper_n, "
+       "shaper_amplitude, shaper_delay)", min=0, max=4, declared_type="Shaper"),
+    _p("f_shaper", 61, "Real", 10.0, "Frequency of the mode the ZV, ZVD and EI shapers are "
+       "designed for (shaper_source = 1), > 0; with shaper = 4 and shaper_source = 2, the "
+       "frequency the delays shaper_delay are given for", "Hz", positive=True),
+    _p("zeta_shaper", 62, "Real", 0.0, "Damping ratio of the mode the ZV, ZVD and EI shapers are "
+       "designed for, in [0, 1)", min=0.0, max=1.0),
+    _p("shaper_source", 63, "Enumeration", 1, "Timing of the impulses: 1 = for f_shaper; 2 = from "
+       "the input f_mode, each delay being the time over which the mode's phase advanced by "
+       "the impulse's share of a period (a time-varying shaper)", min=1, max=2,
+       declared_type="ShaperSource"),
+    _p("shaper_n", 64, "Integer", 1, "Number of impulses of the custom shaper (shaper = 4), "
+       f"1..{MAX_SHAPER_IMPULSES}", min=1, max=MAX_SHAPER_IMPULSES),
+    _p("shaper_amplitude", 300, "Real", 0.0, "Amplitude of each impulse of the custom shaper "
+       f"(shaper_amplitude[1..shaper_n] sum to 1 within {SHAPER_AMPLITUDE_TOLERANCE:g}; a "
+       "negative one is accepted with a warning: the limits then do not hold)",
+       size=MAX_SHAPER_IMPULSES),
+    _p("shaper_delay", 400, "Real", 0.0, "Delay of each impulse of the custom shaper, >= 0, at "
+       f"most {MAX_SHAPER_DELAY_SAMPLES} samples of Te (with shaper_source = 2: the delay at "
+       "f_shaper, scaled to f_mode)", "s", size=MAX_SHAPER_IMPULSES, min=0.0),
 )
 
 PARAMETERS = tuple(v for v in VARIABLES if v.causality == "parameter")

@@ -14,6 +14,7 @@
 #define djl_validate libm_djl_validate
 #define djl_plan_motion libm_djl_plan_motion
 #define djl_eval libm_djl_eval
+#define djl_eval_left libm_djl_eval_left
 #define djl_applied_jerk_time libm_djl_applied_jerk_time
 #define djl_motion_time libm_djl_motion_time
 #define djl_replan libm_djl_replan

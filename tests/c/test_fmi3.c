@@ -318,8 +318,104 @@ static void run_dependencies(void)
     fmi3FreeInstance(c);
 }
 
+/* Input shaping through FMI 3 (docs/generator.md, "Input shaping"): the shaper's arrays as
+ * FMI 3 arrays, the enumerations as Int64; the shaped output equals the convolution of an
+ * unshaped instance's samples (delays on and off the grid), an execute mid-move replans with
+ * the past kept, an FMU state serialised mid-move replays bit for bit, and a bad shaper is
+ * refused naming its parameter. */
+static void run_shaper(void)
+{
+    fmi3Instance c = make("shaped", 1), r = make("plain", 1);
+    fmi3ValueReference vr_k = VR_SHAPER, vr_n = VR_SHAPER_N, vr_a = VR_SHAPER_AMPLITUDE,
+                       vr_dl = VR_SHAPER_DELAY, vr_p = VR_PROFILE, vr_x = VR_X, vr_tgt = VR_TARGET,
+                       vr_ex = VR_EXECUTE, vr_done = VR_DONE, out4[4] = {VR_X, VR_V, VR_A, VR_J};
+    fmi3Int64 custom = 4, jl = 2;
+    fmi3Int32 n = 3;
+    double A[8] = {0.5, 0.3, 0.2, 0, 0, 0, 0, 0}, D[8] = {0.0, 0.0123, 0.031, 0, 0, 0, 0, 0};
+    double back[8], Te = 1e-3, t = 0.0, xr[1200][4], ys[1200][4], x1[300], x2[300], tgt = 0.1;
+    fmi3Boolean eh, term, early, one = fmi3True, done = fmi3False;
+    fmi3Float64 last;
+    fmi3FMUState s = NULL;
+    size_t size = 0;
+    fmi3Byte *buf;
+    int k, i;
+    CHECK(fmi3SetInt64(c, &vr_k, 1, &custom, 1) == fmi3OK, "set shaper as Int64");
+    CHECK(fmi3SetInt32(c, &vr_n, 1, &n, 1) == fmi3OK, "set shaper_n");
+    CHECK(fmi3SetFloat64(c, &vr_a, 1, A, 8) == fmi3OK, "set shaper_amplitude (array)");
+    CHECK(fmi3SetFloat64(c, &vr_dl, 1, D, 8) == fmi3OK, "set shaper_delay (array)");
+    CHECK(fmi3GetFloat64(c, &vr_dl, 1, back, 8) == fmi3OK && memcmp(back, D, sizeof D) == 0,
+          "shaper_delay round trip");
+    CHECK(fmi3SetInt64(c, &vr_p, 1, &jl, 1) == fmi3OK && fmi3SetInt64(r, &vr_p, 1, &jl, 1) ==
+          fmi3OK, "profile");
+    fmi3EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3False, 0.0);
+    fmi3EnterInitializationMode(r, fmi3False, 0.0, 0.0, fmi3False, 0.0);
+    CHECK(fmi3ExitInitializationMode(c) == fmi3OK, "exit shaped: %s", last_message);
+    CHECK(fmi3ExitInitializationMode(r) == fmi3OK, "exit plain: %s", last_message);
+    for (k = 0; k < 1200; k++, t = k * Te) {
+        if (k == 150) { /* a new target mid-move: both replan, the past is kept */
+            fmi3SetFloat64(c, &vr_tgt, 1, &tgt, 1);
+            fmi3SetFloat64(r, &vr_tgt, 1, &tgt, 1);
+            fmi3SetBoolean(c, &vr_ex, 1, &one, 1);
+            fmi3SetBoolean(r, &vr_ex, 1, &one, 1);
+        }
+        if (k == 400) CHECK(fmi3GetFMUState(c, &s) == fmi3OK, "get state");
+        fmi3DoStep(c, t, Te, fmi3True, &eh, &term, &early, &last);
+        fmi3DoStep(r, t, Te, fmi3True, &eh, &term, &early, &last);
+        fmi3GetFloat64(c, out4, 4, ys[k], 4);
+        fmi3GetFloat64(r, out4, 4, xr[k], 4);
+        if (k >= 400 && k < 700) x1[k - 400] = ys[k][0];
+    }
+    /* sample k + 1 of the plain one is p at (k + 1) Te: each copy at (k + 1) Te - D[i] is the
+     * cubic of its sample interval */
+    for (k = 100; k < 1200; k++) {
+        double y[4] = {0, 0, 0, 0};
+        for (i = 0; i < 3; i++) {
+            double si = (k + 1) - D[i] / Te, tau;
+            int q = (int)floor(si + 1e-9);
+            tau = (si - q) * Te;
+            y[0] += A[i] * (xr[q - 1][0] + tau * (xr[q - 1][1] + tau * (0.5 * xr[q - 1][2] +
+                                                                       tau * xr[q - 1][3] / 6.0)));
+            y[1] += A[i] * (xr[q - 1][1] + tau * (xr[q - 1][2] + 0.5 * tau * xr[q - 1][3]));
+            y[2] += A[i] * (xr[q - 1][2] + tau * xr[q - 1][3]);
+            y[3] += A[i] * xr[q - 1][3];
+        }
+        CHECK(fabs(ys[k][0] - y[0]) < 1e-12 && fabs(ys[k][1] - y[1]) < 1e-10 &&
+                  fabs(ys[k][2] - y[2]) < 1e-8 && fabs(ys[k][3] - y[3]) < 1e-6,
+              "shaped sample %d: x %.17g (%.17g) v %g (%g) a %g (%g) j %g (%g)", k + 1, ys[k][0],
+              y[0], ys[k][1], y[1], ys[k][2], y[2], ys[k][3], y[3]);
+    }
+    fmi3GetBoolean(c, &vr_done, 1, &done, 1);
+    CHECK(done && ys[1199][0] == tgt && ys[1199][0] == xr[1199][0], "shaped rests at %.17g",
+          ys[1199][0]);
+    CHECK(fmi3SerializedFMUStateSize(c, s, &size) == fmi3OK, "size");
+    buf = (fmi3Byte *)malloc(size);
+    CHECK(fmi3SerializeFMUState(c, s, buf, size) == fmi3OK, "serialize");
+    fmi3FreeFMUState(c, &s);
+    CHECK(fmi3DeserializeFMUState(c, buf, size, &s) == fmi3OK, "deserialize: %s", last_message);
+    CHECK(fmi3SetFMUState(c, s) == fmi3OK, "set state: %s", last_message);
+    for (k = 400; k < 700; k++) {
+        fmi3DoStep(c, k * Te, Te, fmi3True, &eh, &term, &early, &last);
+        fmi3GetFloat64(c, &vr_x, 1, &x2[k - 400], 1);
+    }
+    CHECK(memcmp(x1, x2, sizeof x1) == 0, "shaped replay after restore differs");
+    fmi3FreeFMUState(c, &s);
+    free(buf);
+    fmi3FreeInstance(c);
+    fmi3FreeInstance(r);
+    /* refused, naming the parameter */
+    c = make("bad_shaper", 1);
+    A[0] = 0.6;
+    CHECK(fmi3SetInt64(c, &vr_k, 1, &custom, 1) == fmi3OK, "shaper");
+    CHECK(fmi3SetInt32(c, &vr_n, 1, &n, 1) == fmi3OK, "shaper_n");
+    CHECK(fmi3SetFloat64(c, &vr_a, 1, A, 8) == fmi3OK, "amplitudes");
+    fmi3EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3False, 0.0);
+    expect_error(fmi3ExitInitializationMode(c), "shaper_amplitude[1..3] sum to 1.09999");
+    fmi3FreeInstance(c);
+}
+
 int main(void)
 {
+    run_shaper();
     run_enumerations();
     run_multisegment_and_state();
     run_bad_inputs();
