@@ -1,6 +1,7 @@
 /*
  * fmi2.c -- FMI 2.0 co-simulation interface: a thin translation of the FMI 2
- * API onto the instance (fmu_instance.c) and the model (fmu_model.c).  Built
+ * API onto the instance (fmu_instance.c), the model (fmu_model.c) and the
+ * base under them (fmu_base.c: logging, errors, the variable table).  Built
  * with the FMI headers shipped by the importer (fmpy: fmpy/c-code).
  */
 #include <stdlib.h>

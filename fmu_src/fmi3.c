@@ -1,6 +1,7 @@
 /*
  * fmi3.c -- FMI 3.0 co-simulation interface: a thin translation of the FMI 3
- * API onto the instance (fmu_instance.c) and the model (fmu_model.c).  Array
+ * API onto the instance (fmu_instance.c), the model (fmu_model.c) and the
+ * base under them (fmu_base.c: logging, errors, the variable table).  Array
  * variables (seg_distance, seg_v_end) are expanded to their elements.
  */
 #include <stdlib.h>

@@ -3,12 +3,13 @@
  * variables (parameters through djl_vars.h's generated table, inputs with
  * their checks, outputs and calculated parameters), the plan made at the end
  * of initialisation, DoStep (the profile's time, commands, replans), and the
- * model's part of an FMU state's validation.  The instance machinery (state
- * machine, logging, FMU state) is fmu_instance.c's; the generator itself is
- * the core's (djl_core.h).
+ * model's part of an FMU state's validation.  It reports through the base
+ * (fmu_base.c: logging, errors, the variable table lookup) and knows nothing
+ * of the instance above it (fmu_instance.c: life cycle, state machine, FMU
+ * state); the generator itself is the core's (djl_core.h).
  */
 #define DJL_VARS_PARAMETERS
-#include "fmu_instance.h"
+#include "fmu_model.h"
 #include "djl_math.h" /* floor, fmax, ... without libm (see there) */
 
 #include <stdio.h>

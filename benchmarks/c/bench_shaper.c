@@ -4,7 +4,7 @@
  * evaluation alone (djl_eval against djl_shaper_eval).  docs/generator.md, "Input shaping".
  *
  *   gcc -std=c99 -O2 -Ifmu_src -I<fmpy>/c-code benchmarks/c/bench_shaper.c fmu_src/fmi2.c \
- *       fmu_src/fmu_instance.c fmu_src/fmu_model.c fmu_src/djl_*.c -lm -o /tmp/bench_shaper
+ *       fmu_src/fmu_*.c fmu_src/djl_*.c -lm -o /tmp/bench_shaper
  *   /tmp/bench_shaper            -> one line per configuration: ns per step (median of 7 runs)
  */
 #define _POSIX_C_SOURCE 199309L

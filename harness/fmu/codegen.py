@@ -23,13 +23,14 @@ from .spec import VARIABLES, Variable
 # sized, landing solved), a motion of segments, evaluation of samples, input shaping
 CORE_SOURCES = ("djl_validate.c", "djl_segment.c", "djl_motion.c", "djl_replan.c", "djl_eval.c",
                 "djl_shaper.c")
-# the FMU, independent of the FMI version: the instance (state machine, logging, checks,
-# FMU state) and the model (its variables, planning, DoStep, commands)
-FMU_SOURCES = ("fmu_instance.c", "fmu_model.c")
+# the FMU, independent of the FMI version, from the bottom up: the base (the instance's data,
+# logging and error reporting, the variable table lookup), the model (its variables,
+# planning, DoStep, commands) and the instance (life cycle, state machine, FMU state)
+FMU_SOURCES = ("fmu_base.c", "fmu_model.c", "fmu_instance.c")
 SOURCES_COMMON = CORE_SOURCES + FMU_SOURCES
 SOURCES = {2: SOURCES_COMMON + ("fmi2.c",), 3: SOURCES_COMMON + ("fmi3.c",)}
-HEADERS = ("djl_core.h", "djl_internal.h", "djl_math.h", "djl_vars.h", "fmu_model.h",
-           "fmu_instance.h")
+HEADERS = ("djl_core.h", "djl_internal.h", "djl_math.h", "djl_vars.h", "fmu_base.h",
+           "fmu_model.h", "fmu_instance.h")
 
 C_PARAM_FIELDS: dict[str, str] = {"T_F1": "T_F[0]", "T_F2": "T_F[1]", "T_F3": "T_F[2]",
                                   "T_F4": "T_F[3]"}

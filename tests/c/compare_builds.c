@@ -16,7 +16,8 @@
  *
  * Usage: compare_builds 2|3 OLD.so OLD_TOKEN NEW.so NEW_TOKEN [cases] [seed]
  * Each build: gcc -std=c99 -O2 -fvisibility=hidden -shared -fPIC -I<its fmu_src>
- *   -I<fmpy>/c-code <its fmu_src>/djl_*.c fmu_instance.c fmu_model.c fmi2.c (or fmi3.c);
+ *   -I<fmpy>/c-code <its fmu_src>/djl_*.c fmu_*.c fmi2.c (or fmi3.c), fmu_*.c being
+ *   fmu_instance.c, fmu_model.c and, in builds that have it, fmu_base.c;
  * its token is DJL_INSTANTIATION_TOKEN of its djl_vars.h.  This driver links the new
  * core (test_core.c's parameter families): gcc ... -Ifmu_src -Itests/c -I<fmpy>/c-code
  *   tests/c/compare_builds.c fmu_src/djl_*.c -ldl -lm.  docs/generator.md gives the runs.
