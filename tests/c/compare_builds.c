@@ -14,13 +14,25 @@
  * (execute edges with random targets, stops, f_mode changes), an FMU state
  * saved mid-run, restored and replayed, and a serialisation round trip.
  *
- * Usage: compare_builds 2|3 OLD.so OLD_TOKEN NEW.so NEW_TOKEN [cases] [seed]
+ * Usage: compare_builds 2|3 OLD.so OLD_TOKEN NEW.so NEW_TOKEN [cases] [seed] [strict]
  * Each build: gcc -std=c99 -O2 -fvisibility=hidden -shared -fPIC -I<its fmu_src>
  *   -I<fmpy>/c-code <its fmu_src>/djl_*.c fmu_*.c fmi2.c (or fmi3.c), fmu_*.c being
  *   fmu_instance.c, fmu_model.c and, in builds that have it, fmu_base.c;
  * its token is DJL_INSTANTIATION_TOKEN of its djl_vars.h.  This driver links the new
  * core (test_core.c's parameter families): gcc ... -Ifmu_src -Itests/c -I<fmpy>/c-code
  *   tests/c/compare_builds.c fmu_src/djl_*.c -ldl -lm.  docs/generator.md gives the runs.
+ *
+ * Log messages are compared whole (up to the FMU's 1024 bytes).  "strict" (8th argument)
+ * is for two builds of the same FMU (the same FMU state layout: a change of structure
+ * only): the scenarios also get an input shaper in half of the cases (ZV, ZVD, EI,
+ * custom; timed for f_shaper or by f_mode; a few invalid), calls that are refused
+ * mid-run (NULL pointers, inputs out of range, debug-logging categories: unknown, NULL,
+ * a subset switched on for a step), and at the end calls an importer gets wrong
+ * (unknown value references, wrong types, setting outputs, calculated or fixed
+ * parameters, bad steps), Terminate, calls after it, Reset; and the FMU state bytes
+ * themselves are compared (mid-run, at the end, after Reset), as is the verdict on
+ * damaged states (a byte changed, then in most of them the checksum made valid again:
+ * the structural checks), a forged state both accept being restored and stepped.
  */
 #define _POSIX_C_SOURCE 200809L
 #define main test_core_main /* test_core.c: its parameter families and random numbers */
@@ -32,21 +44,24 @@
 #include "djl_vars.h"
 #include "fmi2FunctionTypes.h"
 #include "fmi3FunctionTypes.h"
+#include "fmu_base.h" /* strict: model_data, where a damaged state is damaged */
 
 #define MAX_LOG 4096
 
 typedef struct {
     int n;
-    char text[MAX_LOG][160];
+    char text[MAX_LOG][1100]; /* status, category and the whole message (the FMU's <= 1023) */
 } log_book;
 
 static log_book books[2];
 static long diffs, compared_values, compared_logs, refused_restores;
+static int strict; /* the same FMU state layout: see the header */
+static long compared_states, compared_state_bytes, forged_states, forged_accepted, shaped_cases;
 
 static void note(log_book *b, int status, const char *category, const char *msg)
 {
     if (b->n < MAX_LOG) {
-        snprintf(b->text[b->n], sizeof b->text[b->n], "%d|%s|%.140s", status, category, msg);
+        snprintf(b->text[b->n], sizeof b->text[b->n], "%d|%s|%s", status, category, msg);
         b->n++;
     }
 }
@@ -85,6 +100,9 @@ typedef struct {
     fmi2SerializedFMUstateSizeTYPE *ssize2;
     fmi2SerializeFMUstateTYPE *ser2;
     fmi2DeSerializeFMUstateTYPE *deser2;
+    fmi2SetDebugLoggingTYPE *dbg2;
+    fmi2TerminateTYPE *term2;
+    fmi2ResetTYPE *reset2;
     /* FMI 3 */
     fmi3InstantiateCoSimulationTYPE *i3;
     fmi3FreeInstanceTYPE *free3;
@@ -104,6 +122,9 @@ typedef struct {
     fmi3SerializedFMUStateSizeTYPE *ssize3;
     fmi3SerializeFMUStateTYPE *ser3;
     fmi3DeserializeFMUStateTYPE *deser3;
+    fmi3SetDebugLoggingTYPE *dbg3;
+    fmi3TerminateTYPE *term3;
+    fmi3ResetTYPE *reset3;
 } build;
 
 static int version;
@@ -148,6 +169,9 @@ static void load(build *b, const char *path, const char *token)
         LOAD(b, ssize2, "fmi2SerializedFMUstateSize");
         LOAD(b, ser2, "fmi2SerializeFMUstate");
         LOAD(b, deser2, "fmi2DeSerializeFMUstate");
+        LOAD(b, dbg2, "fmi2SetDebugLogging");
+        LOAD(b, term2, "fmi2Terminate");
+        LOAD(b, reset2, "fmi2Reset");
     } else {
         LOAD(b, i3, "fmi3InstantiateCoSimulation");
         LOAD(b, free3, "fmi3FreeInstance");
@@ -167,6 +191,9 @@ static void load(build *b, const char *path, const char *token)
         LOAD(b, ssize3, "fmi3SerializedFMUStateSize");
         LOAD(b, ser3, "fmi3SerializeFMUState");
         LOAD(b, deser3, "fmi3DeserializeFMUState");
+        LOAD(b, dbg3, "fmi3SetDebugLogging");
+        LOAD(b, term3, "fmi3Terminate");
+        LOAD(b, reset3, "fmi3Reset");
     }
 }
 
@@ -355,6 +382,172 @@ static void free_both(void)
     }
 }
 
+/* strict: the serialised FMU states of the two builds, kept to be compared byte for byte */
+static unsigned char *kept[2];
+static size_t kept_n[2];
+
+static void keep_bytes(int w, const void *buf, size_t n)
+{
+    if (!strict) return;
+    free(kept[w]);
+    kept[w] = malloc(n ? n : 1);
+    if (!kept[w]) {
+        fprintf(stderr, "out of memory\n");
+        exit(2);
+    }
+    memcpy(kept[w], buf, n);
+    kept_n[w] = n;
+}
+
+static void compare_kept(int line)
+{
+    size_t i;
+    compared_states++;
+    if (kept_n[0] != kept_n[1]) {
+        differ("FMU state size", line);
+        return;
+    }
+    compared_state_bytes += (long)kept_n[0];
+    if (memcmp(kept[0], kept[1], kept_n[0]) != 0) {
+        for (i = 0; i < kept_n[0] && kept[0][i] == kept[1][i]; i++) continue;
+        if (diffs < 20)
+            fprintf(stderr, "  FMU state: first different byte %lu of %lu\n", (unsigned long)i,
+                    (unsigned long)kept_n[0]);
+        differ("FMU state bytes", line);
+    }
+}
+
+static void free_states(void *s[2])
+{
+    int w;
+    for (w = 0; w < 2; w++) {
+        if (!s[w]) continue;
+        if (version == 2)
+            B[w].frees2(inst[w], (fmi2FMUstate *)&s[w]);
+        else
+            B[w].frees3(inst[w], (fmi3FMUState *)&s[w]);
+        s[w] = NULL;
+    }
+}
+
+static void compare_outputs(void);
+static void step(double h);
+static double random_step(void);
+
+/* strict: where a state is damaged: mostly in the fields the FMU's checks of a state read
+ * (header, parameters, counts, the plan's head and counts, outputs, commands, shaper) */
+static size_t damage_position(size_t n)
+{
+    static const size_t at[][2] = {
+        {0, offsetof(model_data, plan) + 64},
+        {offsetof(model_data, plan) + offsetof(djl_plan, n_pieces) - 32, 64},
+        {offsetof(model_data, plan) + offsetof(djl_plan, piece), 512},
+        {offsetof(model_data, plan) + offsetof(djl_plan, n_steps) - 32, 64},
+        {offsetof(model_data, plan) + offsetof(djl_plan, step), 256},
+        {offsetof(model_data, out), offsetof(model_data, mem) - offsetof(model_data, out) + 512},
+    };
+    const size_t *r = at[irand((int)(sizeof at / sizeof at[0]))];
+    size_t pos = urand() < 0.1 ? (size_t)(urand() * (double)n)
+                               : r[0] + (size_t)(urand() * (double)r[1]);
+    return pos < n ? pos : n - 1;
+}
+
+/* strict: a damaged copy of the kept state (a byte changed, or a word made a NaN, a large
+ * or a negative integer; in 4 of 5 the checksum made valid again, so that the structural
+ * checks judge it) deserialised by both builds: the same verdict and message; a state both
+ * accept is restored and stepped. */
+static void forged_restore(void)
+{
+    size_t n = kept_n[0], pos, i;
+    unsigned char *f;
+    void *s[2] = {NULL, NULL};
+    int w, kind = irand(3);
+    if (n < 64) return;
+    f = malloc(n);
+    if (!f) exit(2);
+    memcpy(f, kept[0], n);
+    pos = damage_position(n);
+    if (kind == 0) {
+        f[pos] ^= (unsigned char)(1 + irand(255));
+    } else {
+        uint64_t v = kind == 1 ? 0x7ff8000000000001ULL
+                               : (urand() < 0.5 ? 0xffffffffffffffffULL : 0x0000000100000000ULL);
+        pos &= ~(size_t)7;
+        if (pos + 8 > n) pos = (n - 8) & ~(size_t)7;
+        memcpy(f + pos, &v, 8);
+    }
+    if (urand() < 0.8) { /* the FMU's checksum: FNV-1a 64 over the words but its own (at 16) */
+        uint64_t h = 0xcbf29ce484222325ULL, x;
+        for (i = 0; i + 8 <= n; i += 8) {
+            if (i == 16) continue;
+            memcpy(&x, f + i, 8);
+            h ^= x;
+            h *= 0x100000001b3ULL;
+        }
+        memcpy(f + 16, &h, 8);
+    }
+    forged_states++;
+    for (w = 0; w < 2; w++)
+        st[w] = version == 2 ? (int)B[w].deser2(inst[w], (const fmi2Byte *)f, n,
+                                                (fmi2FMUstate *)&s[w])
+                             : (int)B[w].deser3(inst[w], f, n, (fmi3FMUState *)&s[w]);
+    if (st[0] != st[1]) differ("damaged state status", __LINE__);
+    compare_logs();
+    if (st[0] == 0 && st[1] == 0) { /* both accept it: restored and stepped */
+        forged_accepted++;
+        for (w = 0; w < 2; w++)
+            st[w] = version == 2 ? (int)B[w].sets2(inst[w], s[w]) : (int)B[w].sets3(inst[w], s[w]);
+        if (st[0] != st[1]) differ("forged state restore status", __LINE__);
+        compare_logs();
+        compare_outputs();
+        for (i = 0; i < 3; i++) {
+            step(random_step());
+            compare_outputs();
+        }
+    }
+    for (w = 0; w < 2; w++)
+        if (st[w] != 0) s[w] = NULL; /* not made */
+    free_states(s);
+    compare_logs();
+    free(f);
+}
+
+/* strict: the FMU state of each build now, serialised: the same bytes (then, if forge,
+ * damaged copies of it). */
+static void compare_states(int forge)
+{
+    void *s[2] = {NULL, NULL};
+    int w, ok;
+    for (w = 0; w < 2; w++)
+        st[w] = version == 2 ? (int)B[w].gets2(inst[w], (fmi2FMUstate *)&s[w])
+                             : (int)B[w].gets3(inst[w], (fmi3FMUState *)&s[w]);
+    if (st[0] != st[1]) differ("get state status", __LINE__);
+    for (w = 0; w < 2; w++)
+        if (st[w] != 0) s[w] = NULL;
+    ok = st[0] == 0 && st[1] == 0;
+    if (ok) {
+        for (w = 0; w < 2; w++) {
+            size_t n = 0;
+            unsigned char *buf;
+            int a, b;
+            a = version == 2 ? (int)B[w].ssize2(inst[w], s[w], &n)
+                             : (int)B[w].ssize3(inst[w], s[w], &n);
+            buf = malloc(n ? n : 1);
+            if (!buf) exit(2);
+            b = version == 2 ? (int)B[w].ser2(inst[w], s[w], (fmi2Byte *)buf, n)
+                             : (int)B[w].ser3(inst[w], s[w], buf, n);
+            st[w] = a | b;
+            keep_bytes(w, buf, n);
+            free(buf);
+        }
+        if (st[0] != st[1]) differ("serialise status", __LINE__);
+        compare_kept(__LINE__);
+    }
+    free_states(s);
+    compare_logs();
+    if (ok && forge && kept_n[0] == kept_n[1]) forged_restore();
+}
+
 /* Save a state in each build, run on, restore it, replay: the same outputs as the first run
  * (each build against itself, and the two builds against each other). */
 static void state_round_trip(int steps)
@@ -393,6 +586,7 @@ static void state_round_trip(int steps)
             B[w].ssize2(inst[w], s[w], &n);
             buf = malloc(n);
             B[w].ser2(inst[w], s[w], buf, n);
+            keep_bytes(w, buf, n);
             st[w] = (int)B[w].deser2(inst[w], buf, n, (fmi2FMUstate *)&s[w]);
             free(buf);
             st[w] |= (int)B[w].sets2(inst[w], s[w]);
@@ -402,6 +596,7 @@ static void state_round_trip(int steps)
             B[w].ssize3(inst[w], s[w], &n);
             buf = malloc(n);
             B[w].ser3(inst[w], s[w], buf, n);
+            keep_bytes(w, buf, n);
             B[w].frees3(inst[w], (fmi3FMUState *)&s[w]);
             st[w] = (int)B[w].deser3(inst[w], buf, n, (fmi3FMUState *)&s[w]);
             free(buf);
@@ -409,6 +604,7 @@ static void state_round_trip(int steps)
         }
     }
     if (st[0] != st[1]) differ("restore status", __LINE__);
+    if (strict) compare_kept(__LINE__);
     refused = st[0] != 0 || st[1] != 0;
     if (refused) { /* both refused it (a pre-existing check, the same in both): no replay */
         refused_restores++;
@@ -444,11 +640,133 @@ static void state_round_trip(int steps)
     }
 }
 
+static void debug_logging(int on, size_t n, const char *const *cats)
+{
+    BOTH(b->dbg2(c, on ? fmi2True : fmi2False, n, cats),
+         b->dbg3(c, on ? fmi3True : fmi3False, n, cats));
+}
+
+/* strict: an input shaper (0: none) among the parameters; its kind */
+static int set_shaper_params(double f_mode)
+{
+    double A[DJL_MAX_SHAPER_IMPULSES] = {0}, D[DJL_MAX_SHAPER_IMPULSES] = {0}, f, zeta, last, sum;
+    int kind = urand() < 0.5 ? 0 : 1 + irand(4), source = urand() < 0.3 ? 2 : 1, n = 1, k;
+    if (kind == 0) return 0;
+    zeta = urand() < 0.5 ? 0.0 : 0.3 * urand();
+    last = log_uniform(0.5, urand() < 0.9 ? 400.0 : 4000.0); /* samples */
+    f = 1.0 / (sqrt(1.0 - zeta * zeta) * last * Te);
+    if (source == 2) f = f_mode * (0.7 + 0.6 * urand()); /* delays near those at f_mode */
+    if (urand() < 0.03) f = urand() < 0.5 ? -1.0 : 0.0; /* invalid */
+    if (kind == 4) {
+        n = 1 + irand(DJL_MAX_SHAPER_IMPULSES);
+        sum = 0.0;
+        for (k = 0; k < n; k++) {
+            A[k] = 0.05 + urand();
+            D[k] = urand() < 0.5 ? Te * (double)irand(300) : urand() * 300.0 * Te;
+        }
+        if (urand() < 0.1) A[irand(n)] = -0.3 * urand(); /* a negative amplitude */
+        for (k = 0; k < n; k++) sum += A[k];
+        if (!(sum > 0.05)) {
+            A[0] += 1.0;
+            sum += 1.0;
+        }
+        for (k = 0; k < n; k++) A[k] /= sum;
+        if (urand() < 0.03) A[0] += 0.5; /* not summing to 1: refused */
+    }
+    set_int(VR_SHAPER, kind, 1);
+    set_int(VR_SHAPER_SOURCE, source, 1);
+    set_real(VR_F_SHAPER, f);
+    set_real(VR_ZETA_SHAPER, zeta);
+    set_int(VR_SHAPER_N, n, 0);
+    if (kind == 4) {
+        set_array(VR_SHAPER_AMPLITUDE, A, DJL_MAX_SHAPER_IMPULSES);
+        set_array(VR_SHAPER_DELAY, D, DJL_MAX_SHAPER_IMPULSES);
+    }
+    return kind;
+}
+
+/* strict: a call refused mid-run, the instance usable after it; 1 if it changed the
+ * debug log's categories (switched back on after the next step) */
+static int refused_call(void)
+{
+    static const char *const null_entry[] = {"logEvents", NULL};
+    static const char *const cats[][2] = {{"logEvents", "logStatusWarning"},
+                                          {"logStatusWarning", "logStatusError"},
+                                          {"logStatusWarning", "noSuchCategory"},
+                                          {"logStatusError", "logEvents"}};
+    fmi2ValueReference r2 = VR_X;
+    fmi3ValueReference r3 = VR_X;
+    double x = 0.0;
+    switch (irand(9)) {
+    case 0: BOTH(b->getR2(c, NULL, 1, &x), b->getF3(c, NULL, 1, &x, 1)); break;
+    case 1: BOTH(b->getR2(c, &r2, 1, NULL), b->getF3(c, &r3, 1, NULL, 1)); break;
+    case 2:
+        r2 = r3 = VR_TARGET;
+        BOTH(b->setR2(c, &r2, 1, NULL), b->setF3(c, &r3, 1, NULL, 1));
+        break;
+    case 3: set_real(VR_TARGET, urand() < 0.5 ? 1e300 : -1e300); break;
+    case 4: set_real(VR_F_MODE, urand() < 0.5 ? -1.0 : 0.0); break;
+    case 5: debug_logging(1, 2, NULL); break;
+    case 6: debug_logging(1, 2, null_entry); break;
+    case 7: debug_logging(urand() < 0.8, (size_t)(1 + irand(2)), cats[irand(4)]); return 1;
+    default: debug_logging(0, 0, NULL); return 1;
+    }
+    return 0;
+}
+
+/* strict, at the end of a case: calls an importer gets wrong (most move the instance to
+ * Error), Terminate, a step after it, Reset; the FMU states of Terminated and of a reset
+ * instance compared */
+static void epilogue(void)
+{
+    int k, n = irand(4);
+    for (k = 0; k < n; k++) {
+        fmi2ValueReference r2;
+        fmi3ValueReference r3;
+        double x = 0.0;
+        fmi2Integer i2 = 0;
+        fmi3Int32 i3 = 0;
+        switch (irand(9)) {
+        case 0: /* an unknown value reference */
+            r2 = r3 = 9999;
+            BOTH(b->getR2(c, &r2, 1, &x), b->getF3(c, &r3, 1, &x, 1));
+            break;
+        case 1: set_real(9999, 1.0); break;
+        case 2: /* an Integer read as a Real */
+            r2 = r3 = VR_SEGMENT;
+            BOTH(b->getR2(c, &r2, 1, &x), b->getF3(c, &r3, 1, &x, 1));
+            break;
+        case 3: /* a Real read as an Integer */
+            r2 = r3 = VR_X;
+            BOTH(b->getI2(c, &r2, 1, &i2), b->getI3(c, &r3, 1, &i3, 1));
+            break;
+        case 4: set_real(VR_X, 1.0); break;         /* an output */
+        case 5: set_real(VR_TE, Te); break;         /* a fixed parameter after initialisation */
+        case 6: set_real(VR_MOTION_TIME, 1.0); break; /* a calculated parameter */
+        case 7: set_real(VR_TIME, 1.0); break;      /* the independent variable */
+        default: step(urand() < 0.5 ? -Te : 0.0); break;
+        }
+        compare_logs();
+        compare_outputs();
+    }
+    BOTH(b->term2(c), b->term3(c));
+    compare_logs();
+    compare_outputs();
+    compare_states(0);
+    step(Te); /* not after Terminate */
+    compare_outputs();
+    BOTH(b->reset2(c), b->reset3(c));
+    compare_logs();
+    compare_states(0);
+    compare_outputs();
+}
+
 static void run_case(void)
 {
     djl_params p;
     double start_time = 0.0, t_start, f_mode, target, scale;
-    int fam = irand(3), jerk_source = 1, i, steps, ex = 0, sp = 0, stateful;
+    int fam = irand(3), jerk_source = 1, i, steps, ex = 0, sp = 0, stateful, shaper = 0;
+    int restore_logging = 0;
     if (fam == 0)
         classic_params(&p);
     else if (fam == 1)
@@ -498,15 +816,18 @@ static void run_case(void)
     set_int(VR_JERK_SOURCE, jerk_source, 1);
     set_real(VR_F_MODE, f_mode);
     set_real(VR_TARGET, target);
+    if (strict) shaper = set_shaper_params(f_mode);
     compare_logs();
     BOTH(b->exit2(c), b->exit3(c));
     compare_logs();
+    if (shaper && st[0] == 0) shaped_cases++;
     compare_values(calc_real, 4, 'R');
     compare_values(calc_int, 4, 'I');
     compare_outputs();
     if (st[0] != 0) { /* refused: a few calls in the error state, then free */
         step(Te);
         compare_outputs();
+        if (strict) epilogue();
         free_both();
         return;
     }
@@ -526,13 +847,23 @@ static void run_case(void)
             f_mode *= 1.0 + (urand() - 0.5) * (urand() < 0.1 ? 1.0 : 0.05);
             set_real(VR_F_MODE, f_mode);
         }
+        if (strict && urand() < 0.03) restore_logging = refused_call();
         compare_logs();
         step(random_step());
         compare_outputs();
+        if (restore_logging) {
+            debug_logging(1, 0, NULL);
+            compare_logs();
+            restore_logging = 0;
+        }
         if (i == stateful) state_round_trip(1 + irand(30));
     }
     compare_values(calc_real, 4, 'R');
     compare_values(calc_int, 4, 'I');
+    if (strict) {
+        compare_states(1);
+        epilogue();
+    }
     free_both();
 }
 
@@ -541,7 +872,7 @@ int main(int argc, char **argv)
     long cases, c;
     if (argc < 6) {
         fprintf(stderr, "usage: compare_builds 2|3 OLD.so OLD_TOKEN NEW.so NEW_TOKEN [cases] "
-                        "[seed]\n");
+                        "[seed] [strict]\n");
         return 2;
     }
     version = atoi(argv[1]);
@@ -549,6 +880,7 @@ int main(int argc, char **argv)
     load(&B[1], argv[4], argv[5]);
     cases = argc > 6 ? atol(argv[6]) : 1000;
     if (argc > 7) rng_state ^= strtoull(argv[7], NULL, 10) * 0x9E3779B97F4A7C15ULL;
+    strict = argc > 8 && strcmp(argv[8], "strict") == 0;
     if (rng_state == 0) rng_state = 88172645463325252ULL;
     for (c = 0; c < cases; c++) {
         case_no = c;
@@ -557,5 +889,9 @@ int main(int argc, char **argv)
     printf("FMI %d: %ld cases, %ld values and %ld log messages compared (%ld FMU states "
            "refused by both): %ld differences\n", version, cases, compared_values, compared_logs,
            refused_restores, diffs);
+    if (strict)
+        printf("strict: %ld shaped cases, %ld FMU states compared (%ld bytes), %ld damaged "
+               "states (%ld accepted by both, restored and stepped)\n", shaped_cases,
+               compared_states, compared_state_bytes, forged_states, forged_accepted);
     return diffs != 0;
 }
