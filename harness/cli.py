@@ -12,6 +12,7 @@ import importlib
 import sys
 
 from . import __version__
+from .compiled import EngineMissingError
 from .errors import CommandError
 
 COMMANDS = ("build", "demo", "simulate", "map", "tune", "online", "report", "compare")
@@ -87,6 +88,9 @@ def main(argv: list[str] | None = None) -> int:
     except CommandError as e:  # a command stops: its exit status, and why
         print(f"djl-fmu {args.command}: {e}", file=sys.stderr)
         return e.status
+    except EngineMissingError as e:  # run from a source checkout without the extension
+        print(f"djl-fmu {args.command}: {e}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130

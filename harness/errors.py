@@ -17,6 +17,7 @@ error                     built-in base                raised by
 ``MoveError``             RuntimeError                 one move of such a batch (names the move)
 ``CommandError``          --                           :mod:`harness.commands` (exit status)
 ``RuckigMissingError``    ImportError                  :mod:`harness.peers.ruckig_ref`
+``EngineMissingError``    ImportError                  :mod:`harness.compiled` (engine not built)
 ========================  ===========================  ========================================
 
 The names that the earlier modules used for the batch errors stay available:

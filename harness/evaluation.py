@@ -262,10 +262,7 @@ def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True,
         if scoring is not None:
             met = dataclasses.replace(met, **score_uncertainty(run, sc, band, scoring))
         base = rec.best.profile if prof == "recommended" and rec is not None else prof
-        params = session.move_params(sc, base, jerk[prof])
-        shaper = shapers.get(prof)
-        if shaper is not None:
-            params.update(shaper.fmu_parameters(sc.simulation.Te))
+        params = session.move_params(sc, base, jerk[prof], shapers.get(prof))
         outcomes[prof] = ProfileOutcome(
             prof, run if keep_runs else None, tunings[prof], met, run.T_F, run.z_v_max,
             run.z_synced, plan_info=dict(run.plan_info),

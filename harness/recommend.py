@@ -6,9 +6,12 @@
 * ``DJL (robust)`` -- DJL's four jerk times (:func:`harness.tuning.search.tune_optimal`,
   jerk times no shorter than JL's);
 * ``JL*shaper`` -- JL (its jerk time, the modal period at the end of the
-  motion) convolved with a shaper of two or three impulses
+  motion) convolved with a shaper of up to 8 impulses: two or three searched
   (:func:`harness.tuning.shaping.robust_shaper`), the textbook ZVD and EI of
-  the end mode (delays rounded to samples) measured beside them;
+  the end mode (delays rounded to samples), and the linear programme's designs
+  on the exact settling time (:func:`harness.tuning.shaping.optimal_shaper`),
+  positive and -- unless ``signed=False`` -- with negative amplitudes, JL's
+  jerk and the move's limits then kept on every sample;
 * ``DJL*shaper`` -- the robust DJL convolved with a shaper;
 
 then measures each candidate exactly (the whole record, every point of the
@@ -34,17 +37,19 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from . import __version__
 from .files import write_text
 from .fmu.build import cache_dir
-from .peers.shapers import ei, zvd
 from .scenario import Scenario
 from .scoring import score_uncertainty
+from .shaper_designs import ei, zvd
 from .simulation.session import Session
 from .simulation.shaped_axis import ShaperSpec
 from .tuning.rule import TuningResult
 from .tuning.search import tune_optimal
-from .tuning.shaping import robust_shaper
+from .tuning.shaping import ShapedObjective, optimal_shaper, robust_shaper
 from .tuning.tune import tune_profile
 
 __all__ = ["FAMILIES", "Candidate", "Recommendation", "recommend"]
@@ -168,13 +173,41 @@ def _classic_shapers(sc: Scenario) -> list[ShaperSpec]:
     return out
 
 
+def _lp_shapers(sc: Scenario, session: Session, T_F: tuple[float, ...], band: float,
+                obj: ShapedObjective, span3: int, signed: bool, notes: list[str]
+                ) -> list[ShaperSpec]:
+    """Return the LP designs on JL (:func:`harness.tuning.shaping.optimal_shaper`).
+
+    Positive amplitudes at spans a little longer than the best three-impulse
+    design's ``span3`` (what the LP gains there: the delays and amplitudes of
+    every impulse chosen together, on the exact settling time); with
+    ``signed``, shapers with negative amplitudes too (their bounds kept on every
+    sample), at the first two spans from 0.5 to 0.9 of the end mode's period
+    (by 0.05) that admit one.
+    """
+    n_d = obj.period / obj.Te
+    runs = [(False, (span3 + 4, span3 + 10))]
+    if signed:
+        runs.append((True, tuple(int(round(f * n_d)) for f in np.arange(0.5, 0.91, 0.05))))
+    out: list[ShaperSpec] = []
+    for sgn, spans in runs:
+        try:
+            st = optimal_shaper(sc, session, "JL", T_F, band, spans=spans, signed=sgn,
+                                enough=2, objective=obj)
+        except ValueError as e:
+            notes.append(str(e))
+            continue
+        out += [spec for _, spec in st.candidates[:2]]
+    return out
+
+
 _SOURCES = ("recommend.py", "tuning/shaping.py", "tuning/search.py", "tuning/rule.py",
             "tuning/tune.py", "scoring.py", "uncertainty.py", "simulation/master.py",
-            "simulation/shaped_axis.py", "peers/shapers.py")
+            "simulation/shaped_axis.py", "shaper_designs.py")
 """The modules whose code a cached recommendation depends on (their digest is in its key)."""
 
 
-def _cache_key(sc: Scenario, band: float) -> str:
+def _cache_key(sc: Scenario, band: float, signed: bool = True) -> str:
     """Return a recommendation's key: the move, the map, the uncertainty, the band, the code."""
     root = Path(__file__).resolve().parent
     h = hashlib.sha256()
@@ -183,7 +216,7 @@ def _cache_key(sc: Scenario, band: float) -> str:
     case = (sc.move, sc.z, sc.modemap, sc.uncertainty, sc.simulation.Te, sc.simulation.step,
             sc.simulation.short_stage, sc.compare.JL_T_F, sc.compare.jl_tuning,
             sc.compare.djl_rule, sc.compare.period_band, sc.compare.max_motion_time)
-    h.update(repr((case, float(band).hex(), __version__)).encode())
+    h.update(repr((case, float(band).hex(), bool(signed), __version__)).encode())
     return h.hexdigest()[:32]
 
 
@@ -203,7 +236,8 @@ def _candidate_of(d: dict[str, Any]) -> Candidate:
 
 
 def recommend(sc: Scenario, session: Session, band: float, *,
-              jl: TuningResult | None = None, cache: bool = True) -> Recommendation:
+              jl: TuningResult | None = None, cache: bool = True,
+              signed: bool = True) -> Recommendation:
     """Tune every family robustly and recommend the one that settles first in the worst case.
 
     Parameters
@@ -220,13 +254,18 @@ def recommend(sc: Scenario, session: Session, band: float, *,
         Keep the result on disk (next to the FMU builds, ``$DJL_FMU_CACHE``),
         keyed by the move, the map, the uncertainty, the band and the code of
         the tuning: the same case is not tuned twice.
+    signed : bool
+        Let the JL*shaper family use shapers with negative amplitudes, their
+        bounds kept on every sample (:func:`harness.tuning.shaping.optimal_shaper`):
+        |j| no higher than JL's, the acceleration and velocity within the move's
+        limits, the velocity never reversed.  False: positive amplitudes only.
 
     Returns
     -------
     Recommendation
     """
     t0 = time.perf_counter()
-    path = cache_dir() / "recommend" / f"{_cache_key(sc, band)}.json" if cache else None
+    path = cache_dir() / "recommend" / f"{_cache_key(sc, band, signed)}.json" if cache else None
     if path is not None and path.is_file():
         try:
             got = json.loads(path.read_text(encoding="utf-8"))
@@ -252,12 +291,16 @@ def recommend(sc: Scenario, session: Session, band: float, *,
     T_djl = tuple(djl.T_F)
     cands.append(_measure(sc, fast, "DJL (robust)", "DJL", T_djl, None, band))
     classic = _classic_shapers(sc)
+    pts = sc.uncertainty.tuning_set().points
     for family, profile, T_F in (("JL*shaper", "JL", T_jl), ("DJL*shaper", "DJL", T_djl)):
         best: Candidate | None = None
         specs = list(classic)
+        obj = ShapedObjective(sc, fast, profile, T_F, pts, band)
         for impulses in (2, 3):
-            st = robust_shaper(sc, fast, profile, T_F, band, impulses=impulses)
+            st = robust_shaper(sc, fast, profile, T_F, band, impulses=impulses, objective=obj)
             specs += [spec for _, spec in st.candidates[:2]]
+        if profile == "JL":
+            specs += _lp_shapers(sc, fast, T_F, band, obj, st.shaper.span, signed, notes)
         for spec in specs:
             c = _measure(sc, fast, family, profile, T_F, spec, band)
             if best is None or (c.settling_worst, c.motion_time) < (best.settling_worst,

@@ -23,7 +23,9 @@ LAYERS: dict[str, tuple[str, ...]] = {
     "basics": (
         "harness", "harness._resources", "harness.errors", "harness.files",
         "harness.executors", "harness.plant", "harness.modemap", "harness.metrics",
-        "harness.uncertainty", "harness._engine", "harness.scenarios", "harness.fmu",
+        "harness.uncertainty", "harness._engine", "harness.compiled", "harness.scenarios",
+        "harness.shaper_designs",
+        "harness.fmu",
         "harness.fmu.*",
     ),
     "inputs": ("harness.tuning_options", "harness.scenario"),
@@ -195,3 +197,25 @@ def test_the_checks_catch_what_they_are_for(tmp_path):
         "harness/plant.py": "def f():\n    import json\n\ndef g():\n    import scipy\n"})
     assert [x.split(": ")[1] for x in lazy_imports(scan(lazy)[1])] == ["import json",
                                                                         "import scipy"]
+
+
+def test_every_command_loads_from_a_checkout_without_the_compiled_engine():
+    """CI and users run ``python -m harness.cli`` from a clean checkout, whose ``harness/``
+    shadows the installed package and has no built ``_engine``: every module must still
+    load (``--help``, ``build``), and a command that needs the engine must say why it
+    cannot run instead of printing a traceback."""
+    import subprocess
+    import sys
+
+    prelude = ("import sys; sys.modules['harness._engine'] = None; "
+               "from harness.cli import main; ")
+    proc = subprocess.run([sys.executable, "-c", prelude + "sys.exit(main(['--help']))"],
+                          cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert "simulate" in proc.stdout and "build" in proc.stdout
+    proc = subprocess.run([sys.executable, "-c", prelude + "sys.exit(main(['simulate']))"],
+                          cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 1
+    assert "Traceback" not in proc.stderr
+    assert "harness._engine is not importable" in proc.stderr
+    assert "pip install" in proc.stderr

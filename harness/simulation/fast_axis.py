@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import _engine
+from ..compiled import engine as _compiled_engine
 from ..errors import HarnessError
 from ..fmu import spec
 from .axis import InputsHook, MoveSamples, PlantInput, PointSamples, StopHook, samples_per_step
@@ -85,9 +85,10 @@ class FastAxis:
             When the generator refuses the parameters (the FMU's message).
         """
         p = dict(params)
+        eng = _compiled_engine()
         try:
-            self._plan = _engine.plan(p, float(start_time))
-        except _engine.PlanError as e:
+            self._plan = eng.plan(p, float(start_time))
+        except eng.PlanError as e:
             raise PlanError(f"{self.name}: {e}") from None
         self.params = p
         self.start_time = float(start_time)
@@ -134,10 +135,11 @@ class FastAxis:
                float(target_time), float(v_cap), float(start_time))
         got = self._sync_cache.get(key)
         if got is None:  # the same synchronisation recurs (tuning, then the run): memoised
+            eng = _compiled_engine()
             try:
-                got = _engine.sync_velocity(dict(params), float(target_time), float(v_cap),
-                                            float(start_time))
-            except _engine.PlanError as e:
+                got = eng.sync_velocity(dict(params), float(target_time), float(v_cap),
+                                        float(start_time))
+            except eng.PlanError as e:
                 raise PlanError(f"{self.name}: {e}") from None
             if len(self._sync_cache) >= 512:
                 self._sync_cache.clear()
@@ -153,7 +155,7 @@ class FastAxis:
 
         Rows: x, v, a, j, x_AL, v_AL, a_AL (shape (7, count)).
         """
-        out = np.empty((_engine.N_SAMPLE_VARS, count))
+        out = np.empty((_compiled_engine().N_SAMPLE_VARS, count))
         self.planned.sample_into(out, int(n0), int(step), int(count))
         return out
 

@@ -51,7 +51,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import _engine
+from ..compiled import engine as _compiled_engine
 from ..plant import Mode, ScheduledMode, free_amplitude, free_response, hermite_mid
 from ..uncertainty import Perturbation
 from .axis import Axis, PlantInput, samples_per_step
@@ -283,9 +283,9 @@ def step_plant(inp: PlantInput, h: float, f_mid: np.ndarray, modes: Sequence[Sch
 
     def run(k0: int, k1: int, a: np.ndarray, j: np.ndarray, hh: float,
             e_out: np.ndarray, s_out: np.ndarray) -> None:
-        _engine.step_modes(np.ascontiguousarray(a), np.ascontiguousarray(j), float(hh),
-                           np.ascontiguousarray(f_mid[:, k0:k1]), zeta, gain, k1 - k0, state,
-                           e_out, s_out)
+        _compiled_engine().step_modes(
+            np.ascontiguousarray(a), np.ascontiguousarray(j), float(hh),
+            np.ascontiguousarray(f_mid[:, k0:k1]), zeta, gain, k1 - k0, state, e_out, s_out)
 
     split = sorted(k for k in inp.pieces if k < n)
     if not split:

@@ -34,7 +34,7 @@ from .axis import Axis, MoveSamples
 from .fast_axis import FastAxis
 from .fmu_axis import FMUAxis
 from .master import CoSimResult, cosimulate, map_error_residuals, perturbed
-from .shaped_axis import ShaperSpec, shaped
+from .shaped_axis import ShaperSpec
 
 __all__ = ["ENGINES", "Session", "make_axis"]
 
@@ -128,9 +128,14 @@ class Session:
     # -------------------------------------------------------- parameters
 
     @staticmethod
-    def move_params(sc: Scenario, profile: str,
-                    T_F: Sequence[float] | None = None) -> dict[str, Any]:
-        """FMU parameters of the excited axis for ``profile`` and jerk times ``T_F``."""
+    def move_params(sc: Scenario, profile: str, T_F: Sequence[float] | None = None,
+                    shaper: ShaperSpec | None = None) -> dict[str, Any]:
+        """FMU parameters of the excited axis for ``profile``, jerk times ``T_F``, ``shaper``.
+
+        A shaper becomes the generator's own custom input shaper (``shaper = 4``,
+        its amplitudes and delays): the FMU and the compiled engine shape the
+        profile themselves.
+        """
         m, s = sc.move, sc.simulation
         p: dict[str, Any] = {
             "profile": spec.PROFILE_CODES[split_profile(profile)[0]], "Te": s.Te,
@@ -140,6 +145,8 @@ class Session:
         }
         if T_F is not None:
             p.update({f"T_F{i + 1}": float(T_F[i]) for i in range(4)})
+        if shaper is not None:
+            p.update(shaper.fmu_parameters(s.Te))
         return p
 
     @staticmethod
@@ -173,14 +180,14 @@ class Session:
 
         return plan_fn
 
-    def excited(self, shaper: ShaperSpec | None = None) -> Axis:
-        """Return the excited axis, shaped by ``shaper`` when given (a shaped axis)."""
-        return shaped(self.axis, shaper)
-
     def plan_move(self, sc: Scenario, profile: str, T_F: Sequence[float] | None,
                   shaper: ShaperSpec | None = None) -> tuple[float, bool]:
-        """Plan both axes for one profile; return the excited axis' motion time and Z's sync."""
-        T_x = self.excited(shaper).plan(self.move_params(sc, profile, T_F))
+        """Plan both axes for one profile; return the excited axis' motion time and Z's sync.
+
+        With ``shaper`` the generator shapes its own output (the motion time then
+        includes the last delayed copy).
+        """
+        T_x = self.axis.plan(self.move_params(sc, profile, T_F, shaper))
         v_z, synced = self.z_velocity(sc, T_x)
         self.z_axis.plan(self.z_move_params(sc, v_z))
         # planning Z may re-plan nothing of the excited axis: it is a separate instance
@@ -188,15 +195,15 @@ class Session:
 
     # ------------------------------------------------------------- runs
 
-    def t_stop_after_motion(self, sc: Scenario, profile: str,
-                            T_F: Sequence[float] | None) -> float:
+    def t_stop_after_motion(self, sc: Scenario, profile: str, T_F: Sequence[float] | None,
+                            shaper: ShaperSpec | None = None) -> float:
         """End of a run that only needs the state when the excited axis' reference ends (s).
 
         The first communication point at or after the end of the motion, plus one
         step: the residual (the state at the end of the reference) is then in the
         record, and nothing after it is simulated.  The excited axis is re-planned.
         """
-        T_x = self.axis.plan(self.move_params(sc, profile, T_F))
+        T_x = self.axis.plan(self.move_params(sc, profile, T_F, shaper))
         return sc.move.t_start + T_x + sc.simulation.step
 
     def run(self, sc: Scenario, profile: str, T_F: Sequence[float] | None = None,
@@ -214,7 +221,8 @@ class Session:
         t_stop : float, optional
             End of the run (s); default ``simulation.t_after`` after both moves.
         shaper : ShaperSpec, optional
-            Shape the excited axis' output (whole-sample delays).
+            The generator's input shaper (whole-sample delays): the FMU (or the
+            compiled engine) produces the shaped reference itself.
 
         Returns
         -------
@@ -226,7 +234,7 @@ class Session:
             t_stop = sc.move.t_start + max(T_x, T_z) + sc.simulation.t_after
         h = sc.simulation.step
         t_stop = h * math.ceil(t_stop / h - 1e-9)
-        run = cosimulate(self.excited(shaper), self.z_axis, sc.modemap.scheduled(), t_stop, h,
+        run = cosimulate(self.axis, self.z_axis, sc.modemap.scheduled(), t_stop, h,
                          profile=profile)
         run.z_synced = synced
         return run
@@ -247,7 +255,7 @@ class Session:
         """
         e = check_map_errors(errors)
         self.plan_move(sc, profile, T_F, shaper)
-        return map_error_residuals(self.excited(shaper), self.z_axis, sc.modemap.scheduled(),
+        return map_error_residuals(self.axis, self.z_axis, sc.modemap.scheduled(),
                                    1.0 + e, sc.simulation.step)
 
     def residuals_under(self, sc: Scenario, profile: str, T_F: Sequence[float] | None,
@@ -262,8 +270,8 @@ class Session:
         pts = list(points)
         if all(p.is_scale_only for p in pts):
             return self.map_error_residuals(sc, profile, T_F, [p.scale for p in pts], shaper)
-        run = self.run(sc, profile, T_F, t_stop=self.t_stop_after_motion(sc, profile, T_F),
-                       shaper=shaper)
+        run = self.run(sc, profile, T_F,
+                       t_stop=self.t_stop_after_motion(sc, profile, T_F, shaper), shaper=shaper)
         pivot = sc.z.z0 + 0.5 * sc.z.distance
         return np.array([r.free_amplitude for r in perturbed(run, sc.modemap.scheduled(), pts,
                                                              pivot, full=False)])

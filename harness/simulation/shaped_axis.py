@@ -10,8 +10,10 @@ feeds the plant exactly, as for any generator profile.
 
 The generator FMU shapes its own output (parameters ``shaper``,
 ``shaper_amplitude[i]``, ``shaper_delay[i]``; docs/generator.md, "Input
-shaping"); this axis is the harness's independent evaluation of the same
-convolution, and what the tuning uses to evaluate a design.
+shaping"), and so does the compiled engine: :class:`~harness.simulation.session.Session`
+runs shaped profiles that way (``Session.run(..., shaper=...)``).  This axis is
+the harness's independent evaluation of the same convolution, from the
+unshaped profile's samples (the tests hold the FMU's shaping against it).
 """
 
 from __future__ import annotations

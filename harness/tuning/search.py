@@ -42,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import _engine
+from ..compiled import engine as _compiled_engine
 from ..plant import hermite_mid
 from ..scenario import Scenario
 from ..simulation.session import Session
@@ -143,8 +143,9 @@ class Objective:
             R = len(rows_f)
             psi = np.empty((R, k_end, 2, 2))
             if k_end:
-                _engine.adjoint_modes(self.h, np.ascontiguousarray(np.vstack(rows_f)),
-                                      np.array(zeta), np.array(gain), k_end, psi)
+                _compiled_engine().adjoint_modes(
+                    self.h, np.ascontiguousarray(np.vstack(rows_f)), np.array(zeta),
+                    np.array(gain), k_end, psi)
             z_arr, w = np.array(zeta), 2.0 * np.pi * np.array(f_end)
             # the final state is psi_a @ a + psi_j @ j, rows (mode x point, state)
             psi_a = np.ascontiguousarray(psi[:, :, :, 0].transpose(0, 2, 1).reshape(2 * R, -1))
