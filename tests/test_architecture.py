@@ -219,3 +219,25 @@ def test_every_command_loads_from_a_checkout_without_the_compiled_engine():
     assert "Traceback" not in proc.stderr
     assert "harness._engine is not importable" in proc.stderr
     assert "pip install" in proc.stderr
+
+
+def test_every_error_of_the_harness_derives_from_one_base():
+    """A script catches every error the harness raises on purpose with one ``except``."""
+    import importlib
+    import inspect
+    import pkgutil
+
+    import harness
+    from harness.errors import HarnessError
+
+    defined = []
+    for info in pkgutil.walk_packages(harness.__path__, "harness."):
+        if info.name == "harness._engine":
+            continue
+        module = importlib.import_module(info.name)
+        defined += [obj for _, obj in inspect.getmembers(module, inspect.isclass)
+                    if issubclass(obj, Exception) and obj.__module__ == info.name]
+    assert len(defined) >= 8  # the walk found the modules
+    strays = sorted(f"{c.__module__}.{c.__qualname__}" for c in defined
+                    if not issubclass(c, HarnessError))
+    assert not strays, f"errors outside HarnessError: {strays}"

@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import HarnessError
 from . import spec
 from .build import default_fmu
 
@@ -36,7 +37,7 @@ REAL_OUTPUTS = ("x", "v", "a", "j", "x_AL", "v_AL", "a_AL")
 ParamValue = float | int | bool | Sequence[float]
 
 
-class FMUError(RuntimeError):
+class FMUError(HarnessError, RuntimeError):
     """An FMI call returned an error; carries the FMU's log messages.
 
     Attributes
