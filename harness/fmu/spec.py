@@ -327,6 +327,35 @@ CALCULATED = tuple(v for v in VARIABLES if v.causality == "calculatedParameter")
 BY_NAME = {v.name: v for v in VARIABLES}
 
 
+FMI2_ENUM_ALIAS_SUFFIX = "_code"
+"""Suffix of the FMI 2 Integer alias of each Enumeration parameter (``profile_code``, ...)."""
+
+
+def fmi2_integer_aliases() -> tuple[Variable, ...]:
+    """Integer aliases of the Enumeration parameters, declared in the FMI 2 model description only.
+
+    Some FMI 2 importers (those built on the FMI Library: libcosim, ecos) skip Enumeration
+    variables, so ``profile``, ``short_stage``, ``jerk_source``, ``shaper`` and
+    ``shaper_source`` could not be set there.  FMI 2.0 (section 2.2.7, ``valueReference``)
+    makes a value reference unique per base type "Real, Integer/Enumeration, Boolean, String"
+    except for alias variables: an Integer with the value reference of an Enumeration is an
+    alias of it, the same value read and written with ``fmi2SetInteger`` /
+    ``fmi2GetInteger``.  Each alias is ``<name>_code``, declared after every other variable
+    (the indices of ``<ModelStructure>`` do not move); FMI 3 has none (its ``<Alias>`` keeps
+    the type).
+    """
+    out = []
+    for v in VARIABLES:
+        if v.type != "Enumeration" or v.causality != "parameter":
+            continue
+        items = ", ".join(f"{value} = {item}" for item, value, _ in ENUMERATIONS[v.declared_type])
+        desc = (f"Integer alias of the Enumeration {v.name} (same value reference), for "
+                f"importers that skip FMI 2 Enumeration variables: {items}")
+        out.append(Variable(v.name + FMI2_ENUM_ALIAS_SUFFIX, v.vr, "Integer", v.causality,
+                            v.variability, desc, None, v.start, v.initial, 1,
+                            min=v.min, max=v.max))
+    return tuple(out)
+
 
 def fmi2_scalars(var: Variable) -> list[tuple[str, int]]:
     """FMI 2 scalar names and value references of ``var`` (arrays are unrolled)."""
