@@ -37,7 +37,8 @@ typical use:
       DJL whose jerk times the FMU takes online from f_mode (the mode map at the current Z
       position, issue #12), against the offline-tuned DJL; in ./djl-fmu-out/online
   djl-fmu build --fmi-version 3 -o out/JerkLimitedTrajectory.fmu
-      write an FMI 3.0 co-simulation FMU (binary for this platform + C sources)
+      write an FMI 3.0 co-simulation FMU (binaries for six platforms with the
+      [platforms] extra, else for this one; C sources)
   djl-fmu report
       check the papers' filtering claims against the FMU, write report.html
   djl-fmu compare --engine fast
