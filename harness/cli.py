@@ -35,7 +35,7 @@ typical use:
       CSV the FMU or a controller loads, in ./djl-fmu-out/tune (docs/tune.md)
   djl-fmu online X
       DJL whose jerk times the FMU takes online from f_mode (the mode map at the current Z
-      position, issue #12), against the offline-tuned DJL; in ./djl-fmu-out/online
+      position), against the offline-tuned DJL; in ./djl-fmu-out/online
   djl-fmu build --fmi-version 3 -o out/JerkLimitedTrajectory.fmu
       write an FMI 3.0 co-simulation FMU (binaries for six platforms with the
       [platforms] extra, else for this one; C sources)

@@ -228,3 +228,24 @@ def test_cli_help_explains_commands():
     proc = subprocess.run([sys.executable, "-m", "harness.cli", "build", "--help"],
                           capture_output=True, text=True)
     assert "--fmi-version" in proc.stdout and "sources/" in proc.stdout
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_model_description_carries_the_generation_date(fmus, version):
+    import datetime as dt
+
+    from fmpy import read_model_description
+
+    md = read_model_description(str(fmus[version]))
+    stamp = md.generationDateAndTime
+    assert stamp is not None and re.fullmatch(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ", stamp), stamp
+    when = dt.datetime.strptime(stamp, "%Y-%m-%dT%H:%M:%SZ").replace(tzinfo=dt.timezone.utc)
+    assert abs((dt.datetime.now(dt.timezone.utc) - when).total_seconds()) < 24 * 3600
+    assert validate_fmu(str(fmus[version])) == []
+
+
+def test_source_date_epoch_fixes_the_generation_date(monkeypatch):
+    from harness.fmu.build import stamped_model_description
+
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1700000000")
+    assert 'generationDateAndTime="2023-11-14T22:13:20Z"' in stamped_model_description(3)

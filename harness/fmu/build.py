@@ -571,7 +571,8 @@ def build_fmu(fmi_version: int, out_path: str | os.PathLike, *,
         root = Path(tmp) / "fmu"
         (root / "sources").mkdir(parents=True)
         (root / "documentation").mkdir()
-        shutil.copyfile(model_description(fmi_version), root / "modelDescription.xml")
+        (root / "modelDescription.xml").write_text(
+            stamped_model_description(fmi_version), encoding="utf-8")
         for f in source_files(fmi_version):
             shutil.copyfile(f, root / "sources" / f.name)
         if fmi_version == 3:
@@ -590,6 +591,33 @@ def build_fmu(fmi_version: int, out_path: str | os.PathLike, *,
         finally:
             tmp_zip.unlink(missing_ok=True)
     return out_path
+
+
+def generation_date() -> str:
+    """Return the FMU's ``generationDateAndTime``: now in UTC, or ``$SOURCE_DATE_EPOCH``'s date.
+
+    The format is the one FMI asks for, ``YYYY-MM-DDThh:mm:ssZ``; ``SOURCE_DATE_EPOCH`` (the
+    reproducible-builds convention, seconds since 1970) makes two builds byte-identical.
+    """
+    from datetime import datetime, timezone
+
+    epoch = os.environ.get("SOURCE_DATE_EPOCH", "").strip()
+    when = (datetime.fromtimestamp(int(epoch), tz=timezone.utc) if epoch.isdigit()
+            else datetime.now(tz=timezone.utc))
+    return when.strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def stamped_model_description(fmi_version: int) -> str:
+    """Return the committed model description with ``generationDateAndTime`` of this build.
+
+    The committed files (``modeldesc/``) carry no date, so that regenerating them from the
+    spec changes nothing; the date is the FMU's, added as the FMU is written.
+    """
+    text = model_description(fmi_version).read_text(encoding="utf-8")
+    tool = f'generationTool="{codegen.GENERATION_TOOL}"'
+    if tool not in text:
+        raise BuildError(f"{model_description(fmi_version)}: no {tool} to date")
+    return text.replace(tool, f'{tool} generationDateAndTime="{generation_date()}"', 1)
 
 
 def _sources_digest(fmi_version: int, cc: str, extra_cflags: tuple[str, ...]) -> str:

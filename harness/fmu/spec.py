@@ -5,7 +5,7 @@ header of value references (``fmu_src/djl_vars.h``) are generated from
 :data:`VARIABLES` by :mod:`harness.fmu.codegen`; a test regenerates them and
 fails if the committed files differ.
 
-Names, units and meanings of the variables listed in issue #2 are a contract
+Names, units and meanings of the first variables (time .. done) are a contract
 with users: extend the list, never rename.
 """
 
@@ -272,8 +272,10 @@ VARIABLES: tuple[Variable, ...] = (
     _i("stop", 52, "Boolean", False, "Rising edge: come to rest with d_max and the stages' jerk "
        "times (wins over execute at the same step); the axis then waits for execute"),
     _i("f_mode", 53, "Real", 10.0, "Frequency of the vibration mode, used when jerk_source = 2 "
-       "(its period is the jerk time of the stages that start) and when shaper_source = 2 (its "
-       "phase times the shaper's impulses)", "Hz", variability="continuous", positive=True),
+       "(its period is the jerk time of the stages that start), when jerk_source = 3 (the same, "
+       "f_mode extrapolated at its rate of change to the stages still to come) and when "
+       "shaper_source = 2 (its phase times the shaper's impulses); ignored otherwise", "Hz",
+       variability="continuous", positive=True),
     _c("motion_time", 40, "Real", "Duration of the motion, filters included (ends at "
        "t_start + motion_time); with a shaper, until its last delayed copy ends (the "
        "shaper's largest delay added)", "s"),
