@@ -108,7 +108,7 @@ def test_cli_bad_arguments(tmp_path, capsys):
 
 def test_cli_help_explains_inputs_outputs_defaults(capsys):
     with pytest.raises(SystemExit):
-        main(["report", "--help"])
+        main(["report", "--help-full"])
     text = capsys.readouterr().out
     for word in ("report.html", "--fast", "--claims", "--fmu", "--fmi-version", "Exit status",
                  "PASSED"):
