@@ -4,7 +4,7 @@
 #define DJL_VARS_H
 
 #define DJL_MODEL_IDENTIFIER "JerkLimitedTrajectory"
-#define DJL_INSTANTIATION_TOKEN "{4c695762-9bae-5c1c-ac54-404f2fc762d4}"
+#define DJL_INSTANTIATION_TOKEN "{29dde695-320a-5019-967e-f29722ca65b0}"
 #define DJL_VARS_MAX_SEGMENTS 32
 
 /* value references (arrays: first element; element i at base + i) */

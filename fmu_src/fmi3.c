@@ -239,9 +239,14 @@ static fmi3Status access(fmi3Instance instance, const char *fn, int set, char ty
         j += v.size;
     }
     if (j != nValues) {
-        model_fail(&s->m, "%s: nValues = %lu, but the variables requested hold %lu values", fn,
-                   (unsigned long)nValues, (unsigned long)j);
-        return fmi3Error;
+        /* An illegal argument: fmi3Error, as the standard requires (2.2.3), but refused like a
+         * NULL pointer -- nothing read or written, the instance left as it was -- so that an
+         * importer that reads every variable with nValues = 1, arrays included, may go on
+         * with the others (and may still reset, as the standard tells it to). */
+        return (fmi3Status)model_refuse(&s->m,
+                                        "%s: nValues = %lu, but the variables requested hold "
+                                        "%lu values (nothing was read or written)",
+                                        fn, (unsigned long)nValues, (unsigned long)j);
     }
     j = 0;
     for (k = 0; k < nvr; k++) {

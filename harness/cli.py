@@ -35,9 +35,10 @@ typical use:
       CSV the FMU or a controller loads, in ./djl-fmu-out/tune (docs/tune.md)
   djl-fmu online X
       DJL whose jerk times the FMU takes online from f_mode (the mode map at the current Z
-      position, issue #12), against the offline-tuned DJL; in ./djl-fmu-out/online
+      position), against the offline-tuned DJL; in ./djl-fmu-out/online
   djl-fmu build --fmi-version 3 -o out/JerkLimitedTrajectory.fmu
-      write an FMI 3.0 co-simulation FMU (binary for this platform + C sources)
+      write an FMI 3.0 co-simulation FMU (binaries for six platforms with the
+      [platforms] extra, else for this one; C sources)
   djl-fmu report
       check the papers' filtering claims against the FMU, write report.html
   djl-fmu compare --engine fast
@@ -49,6 +50,50 @@ typical use:
 Run 'djl-fmu <command> --help' for the options of a command.
 Units are SI throughout (m, s, m/s, m/s2, m/s3, Hz).
 """
+
+
+DOCS: dict[str, str] = {
+    "build": "docs/platforms.md", "demo": "docs/generator.md", "simulate": "docs/harness.md",
+    "map": "docs/map.md", "tune": "docs/tune.md", "online": "docs/harness.md",
+    "report": "docs/claims.md", "compare": "docs/peers.md",
+}
+"""Where each command is documented (in the source checkout, and online with the project)."""
+
+SHORT_DESCRIPTION = 400
+"""A command's ``--help`` shows its description's first paragraph, cut to about this many
+characters; ``--help-full`` shows everything."""
+
+
+class _FullHelp(argparse.Action):
+    """``--help-full``: the command's whole description, options and epilog."""
+
+    def __init__(self, option_strings: list[str], dest: str = argparse.SUPPRESS,
+                 default: str = argparse.SUPPRESS, help: str | None = None) -> None:
+        super().__init__(option_strings, dest, nargs=0, default=default, help=help)
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                 values: object, option_string: str | None = None) -> None:
+        parser.description, parser.epilog, parser.formatter_class = (
+            parser._djl_full)  # type: ignore[attr-defined]
+        parser.print_help()
+        parser.exit()
+
+
+def _shorten_help(name: str, p: argparse.ArgumentParser) -> None:
+    """Make a command's ``--help`` short: first paragraph, options, where to read more."""
+    full = (p.description, p.epilog, p.formatter_class)
+    p._djl_full = full  # type: ignore[attr-defined]
+    first = (p.description or "").strip().split("\n\n")[0]
+    first = " ".join(first.split())
+    if len(first) > SHORT_DESCRIPTION:
+        cut = first[:SHORT_DESCRIPTION]
+        first = cut[:cut.rfind(". ") + 1] if ". " in cut else cut.rsplit(" ", 1)[0] + " ..."
+    p.description = first
+    p.formatter_class = argparse.HelpFormatter
+    p.epilog = (f"Inputs, outputs and examples: djl-fmu {name} --help-full; "
+                f"documentation: {DOCS.get(name, 'README.md')}.")
+    p.add_argument("--help-full", action=_FullHelp,
+                   help="the full help: every output file, the scenario keys, examples")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -73,6 +118,8 @@ def build_parser() -> argparse.ArgumentParser:
                 continue  # command not available in this build
             raise
         module.register(sub)
+    for name, p in sub.choices.items():
+        _shorten_help(name, p)
     return parser
 
 

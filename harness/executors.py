@@ -93,6 +93,38 @@ class SerialExecutor(Executor):
         return 1
 
 
+def _quiet_cancelled_pool_errors() -> None:
+    """Silence the pool manager's ``InvalidStateError`` after an interrupted shutdown.
+
+    When the workers die with the pool (a SIGTERM sent to the whole process group) after
+    ``shutdown(cancel_futures=True)``, Python 3.11's pool manager thread sets
+    ``BrokenProcessPool`` on futures already cancelled and dies printing a traceback
+    (``InvalidStateError: CANCELLED``; Python 3.12 ignores that case).  Nothing waits on
+    those futures any more: the error is dropped, every other thread exception is printed
+    as before.  Installed once, on the first interrupted pool.
+    """
+    import threading
+    from concurrent.futures import InvalidStateError
+
+    previous = threading.excepthook
+    if getattr(previous, "_djl_quiet", False):
+        return
+
+    def hook(args: threading.ExceptHookArgs) -> None:
+        tb, in_manager = args.exc_traceback, False
+        while tb is not None:
+            code = tb.tb_frame.f_code
+            in_manager |= (code.co_name == "terminate_broken"
+                           and code.co_filename.endswith(os.path.join("futures", "process.py")))
+            tb = tb.tb_next
+        if args.exc_type is InvalidStateError and in_manager:
+            return
+        previous(args)
+
+    hook._djl_quiet = True  # type: ignore[attr-defined]
+    threading.excepthook = hook
+
+
 class _ProcessPool(ProcessPoolExecutor):
     """A process pool that says how many processes it has."""
 
@@ -214,6 +246,8 @@ def make_executor(workers: int | None = None, scheduler: str | None = None, *,
             ok = True
         finally:
             # on an error or an interrupt, drop the queued tasks and do not wait
+            if not ok and isinstance(ex, ProcessPoolExecutor):
+                _quiet_cancelled_pool_errors()
             ex.shutdown(wait=ok, cancel_futures=not ok)
         return
     if workers is not None:

@@ -1,4 +1,4 @@
-"""Online f_mode: the paper's DJL rule applied by the FMU inside the co-simulation (issue #12).
+"""Online f_mode: the paper's DJL rule applied by the FMU inside the co-simulation.
 
 The offline harness tunes DJL before the move (:mod:`harness.tuning`): it plans
 the move, reads where the four constant-jerk stages start, looks up the modal
@@ -1027,7 +1027,7 @@ def _run(sc: Scenario, session: Session, step: float | None, offline: str,
     missing = [n for n in COMMANDED_VARIABLES if n not in names]
     if missing:
         raise ValueError(f"{session.axis.g.path}: the FMU lacks the commanded interface "
-                         f"(issue #12): no {', '.join(missing)}")
+                         f"(docs/generator.md): no {', '.join(missing)}")
     allowed = jerk_source_values(md)
     if allowed is not None and jerk_source not in allowed:
         raise ValueError(f"{session.axis.g.path}: the FMU has no jerk_source = {jerk_source} "

@@ -37,6 +37,7 @@ from .claims.formulas import DERIVATIONS
 from .claims.registry import run_claims
 from .files import OutputSet
 from .peers.compare import compare_scenario
+from .peers.ruckig_ref import COMPARE_HINT, ruckig_available
 from .scenario import load_scenario
 
 _CSS = """
@@ -58,6 +59,7 @@ blockquote { margin: 0.6em 0; padding: 0.4em 1em; background: #f7f7f4;
 img { max-width: 100%; border: 1px solid #eee; margin: 0.5em 0; }
 pre { background: #f6f6f6; padding: 0.6em; overflow-x: auto; font-size: 0.85em; }
 .note { color: #555; font-size: 0.85em; }
+.skipped { background: #fff4d6; border-left: 4px solid #e0a800; padding: 0.5em 0.8em; }
 """
 
 
@@ -163,9 +165,15 @@ def _claim_section(r: ClaimResult, img_src: Callable[[int, int, bytes], str]) ->
     return "\n".join(out)
 
 
+PEERS_SKIPPED = ("The comparison with the peer methods was left out: it needs the optional "
+                 "package ruckig (the time-optimal jerk-limited reference), which is not "
+                 f"installed: {COMPARE_HINT}, then run the report again.")
+"""The report's note (and the console's warning) when ruckig is missing."""
+
+
 def peers_section(settings: Settings,
                   img_src: Callable[[int, int, bytes], str] | None = None) -> str:
-    """HTML section comparing AL / JL / DJL with the peers (issues 5 and 9) on scenarios X and Y.
+    """HTML section comparing AL / JL / DJL with the peers on scenarios X and Y.
 
     Every method goes through the same co-simulation (generator FMU or the peer's exact
     motion, Z axis, plant) and the same metrics as ``djl-fmu compare``, at the same
@@ -173,6 +181,9 @@ def peers_section(settings: Settings,
     fast settings use fewer points on the robustness curves.  One figure per scenario:
     the stationary-mode curves beside the time-varying map-error curves.
     """
+    if not ruckig_available():
+        return (f"<h2 id='peers'>Peers side by side</h2>\n<p class='skipped'>{_e(PEERS_SKIPPED)}"
+                "</p>")
     errors = np.linspace(-0.4, 0.4, 9 if settings.fast else 41)
     map_errors = np.linspace(-0.2, 0.2, 9 if settings.fast else 41)
     parts = [
@@ -229,7 +240,7 @@ def render_html(results: Sequence[ClaimResult], *, settings: Settings, elapsed: 
     """Render the report as an HTML string (closes the results' figures).
 
     ``extra_sections`` are HTML fragments appended after the claims (the peer
-    comparison of issue 5).
+    comparison).
     """
     if img_src is None:
         def img_src(_n: int, _i: int, png: bytes) -> str:
@@ -324,7 +335,7 @@ def write_report(path: str | os.PathLike = "report.html", *, fast: bool = False,
     on_result : callable, optional
         Called with each claim's result as it completes.
     peers : bool, optional
-        Append the comparison with the peer methods (issue 5; needs ``ruckig``);
+        Append the comparison with the peer methods (needs ``ruckig``);
         by default when every claim is run.
 
     Returns

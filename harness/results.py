@@ -586,7 +586,7 @@ class SweepResult:
         return [p for p in first if "-" in p and "JL" in first]
 
     def tuned_stats(self, variant: str) -> dict[str, float]:
-        """Compare a tuned variant with JL over the distinct moves (issue #9 targets).
+        """Compare a tuned variant with JL over the distinct moves.
 
         Returns
         -------

@@ -457,6 +457,11 @@ class _Table:
         if k in self.data:
             return self.data[k]
         if default is _MISSING:
+            # a required key missing beside an unread key spelt almost like it: the typo
+            typo = _close_key(k, [d for d in self.data if d not in self.used], cutoff=0.85)
+            if typo is not None:
+                raise self.err(typo, self.data[typo], f"unknown key; did you mean {k}? "
+                               f"({self.key(k)} is required" + (f": {what})" if what else ")"))
             raise self.err(k, _MISSING, what or "required")
         return default
 
@@ -523,7 +528,24 @@ class _Table:
         unknown = [k for k in self.data if k not in self.used]
         if unknown:
             k = unknown[0]
-            raise self.err(k, self.data[k], f"unknown key (known: {', '.join(sorted(self.used))})")
+            near = _close_key(k, sorted(self.used), cutoff=0.6)
+            hint = f"did you mean {near}? " if near is not None else ""
+            raise self.err(k, self.data[k],
+                           f"unknown key; {hint}(known: {', '.join(sorted(self.used))})")
+
+
+def _close_key(key: str, candidates: list[str], *, cutoff: float) -> str | None:
+    """Return the candidate closest to ``key`` (case and underscores ignored), if any is close."""
+    import difflib
+
+    def norm(x: str) -> str:
+        return x.lower().replace("_", "").replace("-", "")
+
+    by_norm: dict[str, str] = {}
+    for c in candidates:
+        by_norm.setdefault(norm(c), c)
+    best = difflib.get_close_matches(norm(key), list(by_norm), n=1, cutoff=cutoff)
+    return by_norm[best[0]] if best else None
 
 
 def _show(v: Any, limit: int = 60) -> Any:

@@ -21,7 +21,7 @@ name = "cli-test"
 
 def test_help_explains_inputs_outputs_and_defaults(capsys):
     with pytest.raises(SystemExit) as ei:
-        main(["simulate", "--help"])
+        main(["simulate", "--help-full"])
     assert ei.value.code == 0
     out = capsys.readouterr().out
     for word in ("SCENARIO", "TOML", "sweep-X", "--out", "djl-fmu-out/simulate", ".csv", ".png",
@@ -116,3 +116,21 @@ def test_embedded_name_runs(tmp_path, capsys, fmu2):
     rc = main(["simulate", "Y", "--fmu", str(fmu2), "-o", str(tmp_path), "-q", "--no-plot"])
     assert rc == 0
     assert Path(tmp_path / "Y.csv").exists()
+
+
+@pytest.mark.parametrize("command", ["build", "demo", "simulate", "map", "tune", "online",
+                                     "report", "compare"])
+def test_short_help_points_to_the_full_help_and_the_docs(command, capsys):
+    from harness.cli import DOCS
+
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    short = capsys.readouterr().out
+    with pytest.raises(SystemExit):
+        main([command, "--help-full"])
+    full = capsys.readouterr().out
+    assert len(short.splitlines()) <= 65, len(short.splitlines())
+    assert f"djl-fmu {command} --help-full" in " ".join(short.split())
+    assert DOCS[command] in " ".join(short.split())
+    assert (Path(__file__).resolve().parents[1] / DOCS[command]).is_file()
+    assert "issue #" not in short + full

@@ -95,16 +95,17 @@ def test_readme_fmpy_snippet(tmp_path, fmus, v, capsys):
         # instead; at 1.2 s to 0.4 m, stopped on the way at 1.4 s (a command is a rising
         # edge: False in between)
         signals = np.array([
-            # time  target  execute  stop
-            (0.0,   0.0,    False,   False),
-            (0.1,   0.3,    True,    False),
-            (0.2,   0.3,    False,   False),
-            (0.5,   0.1,    True,    False),
-            (0.6,   0.1,    False,   False),
-            (1.2,   0.4,    True,    False),
-            (1.3,   0.4,    False,   False),
-            (1.4,   0.4,    False,   True),
-        ], dtype=[("time", float), ("target", float), ("execute", bool), ("stop", bool)])
+            # time  target  execute  stop    f_mode (Hz; read only with jerk_source 2, 3)
+            (0.0,   0.0,    False,   False,  10.0),
+            (0.1,   0.3,    True,    False,  10.0),
+            (0.2,   0.3,    False,   False,  10.0),
+            (0.5,   0.1,    True,    False,  10.0),
+            (0.6,   0.1,    False,   False,  10.0),
+            (1.2,   0.4,    True,    False,  10.0),
+            (1.3,   0.4,    False,   False,  10.0),
+            (1.4,   0.4,    False,   True,   10.0),
+        ], dtype=[("time", float), ("target", float), ("execute", bool), ("stop", bool),
+           ("f_mode", float)])
 
         res = simulate_fmu("JerkLimitedTrajectory.fmu", stop_time=2.0, output_interval=1e-3,
                            start_values={"distance": 0.0, "v_max": 0.5, "a_max": 4.0,
@@ -116,7 +117,8 @@ def test_readme_fmpy_snippet(tmp_path, fmus, v, capsys):
         return res, ends
 
     res, ends = _in(tmp_path, snippet)
-    capsys.readouterr()
+    out = capsys.readouterr().out
+    assert "Warning" not in out and "missing input" not in out, out  # runs without warnings
     # what the snippet prints (a command read at t acts from the next sample, t + 1 ms)
     np.testing.assert_allclose(res["time"][ends], [1.062, 1.586], rtol=0, atol=1e-9)
     assert res["x"][ends[1]] == pytest.approx(0.197214, abs=1e-6)

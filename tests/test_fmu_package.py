@@ -116,11 +116,12 @@ def test_model_description_declares_capabilities(fmus, version):
     assert inputs["target"].unit == "m" and inputs["f_mode"].unit == "Hz"
     assert by["jerk_source"].declaredType.name == "JerkSource"
     assert by["busy"].type == "Boolean" and by["stage"].causality == "output"
-    # ModelStructure: every output, depending on the inputs (no states)
+    # ModelStructure: every output, without direct feedthrough (no states; an input acts
+    # from the next step: tests/test_fmu_importers.py)
     outs = md.outputs
     assert {u.variable.name for u in outs} == {v.name for v in md.modelVariables
                                                if v.causality == "output"}
-    assert all({d.name for d in u.dependencies} == set(inputs) for u in outs)
+    assert all(u.dependencies == [] for u in outs)
     assert {u.variable.name for u in md.initialUnknowns} >= {"motion_time", "N_F1", "x"}
 
 
@@ -227,3 +228,24 @@ def test_cli_help_explains_commands():
     proc = subprocess.run([sys.executable, "-m", "harness.cli", "build", "--help"],
                           capture_output=True, text=True)
     assert "--fmi-version" in proc.stdout and "sources/" in proc.stdout
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_model_description_carries_the_generation_date(fmus, version):
+    import datetime as dt
+
+    from fmpy import read_model_description
+
+    md = read_model_description(str(fmus[version]))
+    stamp = md.generationDateAndTime
+    assert stamp is not None and re.fullmatch(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ", stamp), stamp
+    when = dt.datetime.strptime(stamp, "%Y-%m-%dT%H:%M:%SZ").replace(tzinfo=dt.timezone.utc)
+    assert abs((dt.datetime.now(dt.timezone.utc) - when).total_seconds()) < 24 * 3600
+    assert validate_fmu(str(fmus[version])) == []
+
+
+def test_source_date_epoch_fixes_the_generation_date(monkeypatch):
+    from harness.fmu.build import stamped_model_description
+
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1700000000")
+    assert 'generationDateAndTime="2023-11-14T22:13:20Z"' in stamped_model_description(3)

@@ -363,7 +363,7 @@ def test_table_and_heat_maps(serial):
 
 def test_cli_help(capsys):
     with pytest.raises(SystemExit) as ei:
-        main(["map", "--help"])
+        main(["map", "--help-full"])
     assert ei.value.code == 0
     out = capsys.readouterr().out
     for word in ("SCENARIO", "[map]", "--workers", "--scheduler", "--max-moves", "--engine",

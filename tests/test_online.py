@@ -708,7 +708,7 @@ def test_cli_refuses_bad_input_and_writes_nothing(tmp_path, capsys, args, msg):
 
 def test_cli_help(capsys):
     with pytest.raises(SystemExit):
-        main(["online", "--help"])
+        main(["online", "--help-full"])
     out = capsys.readouterr().out
     assert "jerk_source" in out and "<name>-online.csv" in out and "default X" in out
     assert "--jerk-source" in out and "f_mode_ahead" in out and "both" in out

@@ -396,3 +396,47 @@ def test_every_command_writes_its_set_whole(tmp_path, monkeypatch, capsys, comma
     assert after["notes.txt"] == before["notes.txt"]
     assert all(after[n] != before[n] for n in names)
     _no_staging(out)
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="process groups and SIGTERM are POSIX")
+def test_sigterm_to_a_pooled_map_exits_quietly(tmp_path):
+    """SIGTERM to the whole process group of a map on a process pool (what a job runner or
+    `timeout` sends): the one line "terminated", exit 143, no traceback from the pool."""
+    import subprocess
+    import time
+
+    out = tmp_path / "map"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "harness.cli", "map", "X", "--workers", "2", "--max-moves",
+         "3000", "-o", str(out)],
+        cwd=Path(__file__).resolve().parents[1], stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        # wait for the two workers, then let them take tasks
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            kids = [p for p in Path("/proc").iterdir() if p.name.isdigit()
+                    and _ppid(p) == proc.pid]
+            if len(kids) >= 2 or proc.poll() is not None:
+                break
+            time.sleep(0.2)
+        time.sleep(3.0)
+        assert proc.poll() is None, proc.communicate()
+        os.killpg(proc.pid, signal.SIGTERM)
+        stdout, stderr = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:  # pragma: no cover
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+    assert proc.returncode == 143, stderr
+    assert stderr == "djl-fmu map: terminated (SIGTERM)\n", stderr
+    assert "Traceback" not in stdout + stderr
+    assert not out.exists() or not any(out.iterdir())
+
+
+def _ppid(proc_dir: Path) -> int | None:
+    try:
+        stat = (proc_dir / "stat").read_text()
+    except OSError:
+        return None
+    return int(stat.rsplit(")", 1)[1].split()[1])

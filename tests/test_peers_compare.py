@@ -350,7 +350,7 @@ def test_cli_bad_input(tmp_path, capsys, argv, msg):
 
 def test_cli_help(capsys):
     with pytest.raises(SystemExit):
-        main(["compare", "--help"])
+        main(["compare", "--help-full"])
     text = capsys.readouterr().out
     for word in ("time-optimal", "Sato", "ZVD", "damped jerk", "robustness", "--timeopt",
                  "summary.txt", "ruckig", "JL*ZV", "TV-ZV", "Chang & Park", "--no-tuned-djl",

@@ -108,7 +108,7 @@ def test_cli_bad_arguments(tmp_path, capsys):
 
 def test_cli_help_explains_inputs_outputs_defaults(capsys):
     with pytest.raises(SystemExit):
-        main(["report", "--help"])
+        main(["report", "--help-full"])
     text = capsys.readouterr().out
     for word in ("report.html", "--fast", "--claims", "--fmu", "--fmi-version", "Exit status",
                  "PASSED"):
@@ -147,3 +147,25 @@ def test_cli_refuses_a_file_that_is_not_a_generator_fmu(tmp_path, capsys):
     assert main(["report", "--fmu", str(junk), "-o", str(out), "--fast"]) == 2
     assert "cannot read" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_report_without_ruckig_warns_and_says_so_in_the_html(tmp_path, fmu2, monkeypatch,
+                                                             capsys):
+    """ruckig not installed: a warning on the console and a readable note in the HTML (the
+    install command from a checkout), no raw exception text; the claims still run."""
+    import sys
+
+    import harness.report as report
+    from harness.cli import main
+
+    monkeypatch.setitem(sys.modules, "ruckig", None)  # `import ruckig` raises ImportError
+    monkeypatch.setattr(report, "run_claims", lambda *a, **k: [])  # the claims: not the point
+    out = tmp_path / "r.html"
+    assert main(["report", "--fast", "--fmu", str(fmu2), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith("warning: The comparison with the peer methods was left out")
+    assert "pip install '.[compare]'" in err
+    html = out.read_text(encoding="utf-8")
+    assert "<p class='skipped'>The comparison with the peer methods was left out" in html
+    assert "pip install &#x27;.[compare]&#x27;" in html or "pip install '.[compare]'" in html
+    assert "RuckigMissingError" not in html and "raised" not in html

@@ -298,3 +298,36 @@ def test_bad_settle_band_names_the_key(tmp_path, line, profiles, value, words):
     assert str(path) in msg and "simulation.settle_band" in msg and value in msg, msg
     assert words in msg, msg
     assert ei.value.key == "simulation.settle_band"
+
+
+DID_YOU_MEAN = [
+    # a required key misspelt: the typo is named, not "v_max is missing"
+    ("v_max = 0.5\na_max = 4.0", "vmax = 0.5\na_max = 4.0", "move.vmax", "v_max"),
+    ("distance = -0.2\nv_max", "Distance = -0.2\nv_max", "move.Distance", "distance"),
+    # an optional key misspelt: unknown, with the nearest known key
+    ("zeta = 0.03", "zeta = 0.03\nzetta = 0.04", "mode[1].zetta", "zeta"),
+    ("tune_mode = 1", "tune_mode = 1\ntunemode = 2", "compare.tunemode", "tune_mode"),
+    ("t_after = 0.5", "t_after = 0.5\nt_aftr = 0.7", "simulation.t_aftr", "t_after"),
+]
+
+
+@pytest.mark.parametrize("old, new, key, meant", DID_YOU_MEAN, ids=[d[2] for d in DID_YOU_MEAN])
+def test_unknown_key_gets_a_did_you_mean(tmp_path, old, new, key, meant):
+    path = write(tmp_path, replace_line(GOOD, old, new))
+    with pytest.raises(ScenarioError) as ei:
+        load_scenario(path)
+    msg = str(ei.value)
+    assert f"{key} = " in msg and "unknown key" in msg, msg
+    assert f"did you mean {meant}?" in msg, msg
+    assert "is missing" not in msg
+
+
+def test_no_did_you_mean_for_a_key_unlike_any(tmp_path):
+    path = write(tmp_path, replace_line(GOOD, "tune_mode = 1", "tune_mode = 1\nbanana = 2"))
+    with pytest.raises(ScenarioError) as ei:
+        load_scenario(path)
+    assert "compare.banana" in str(ei.value) and "did you mean" not in str(ei.value)
+    # a missing key with no look-alike is still reported as missing
+    path = write(tmp_path, replace_line(GOOD, "v_max = 0.5\na_max = 4.0", "a_max = 4.0"))
+    with pytest.raises(ScenarioError, match=r"move\.v_max is missing"):
+        load_scenario(path)

@@ -428,7 +428,7 @@ def test_cli_help_and_command_list(capsys):
     out = capsys.readouterr().out
     assert "djl-fmu tune" in out
     with pytest.raises(SystemExit):
-        main(["tune", "--help"])
+        main(["tune", "--help-full"])
     out = capsys.readouterr().out
     assert "default: DJL robust, JL end" in out and "--max-moves" in out
 

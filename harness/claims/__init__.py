@@ -1,4 +1,4 @@
-"""The papers' filtering claims as executable checks (issue 4).
+"""The papers' filtering claims as executable checks.
 
 Each module verifies one claim of Béarée & Olabi 2013 (paper ``000``) and
 Béarée 2014 (paper ``003``) against the product: it computes the paper's side

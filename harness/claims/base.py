@@ -169,7 +169,7 @@ class ClaimResult:
     Attributes
     ----------
     number : int
-        Claim number of issue 4.
+        Claim number (docs/claims.md).
     title : str
         Short title.
     source : str

@@ -6,7 +6,17 @@ import argparse
 from pathlib import Path
 
 from ..files import OutputSet
-from ..fmu.build import BuildError, build_fmu, resolve_platforms
+from ..fmu.build import (
+    ALL_PLATFORMS,
+    PLATFORMS_HINT,
+    ZIG,
+    BuildError,
+    build_fmu,
+    compilers,
+    default_platforms,
+    resolve_platforms,
+    zig_available,
+)
 from ._common import CommandError, add_out_option, interruptible
 
 
@@ -16,27 +26,33 @@ def register(sub: argparse._SubParsersAction) -> None:
         "build",
         help="write the generator FMU (FMI 2.0 or 3.0, co-simulation)",
         description=(
-            "Cross-compile the generator with zig's clang (PyPI ziglang) and write a "
-            "co-simulation FMU holding modelDescription.xml, a binary for each platform "
-            "(FMI 3: binaries/x86_64-windows, x86-windows, x86_64-linux, aarch64-linux, "
-            "x86_64-darwin, aarch64-darwin; FMI 2: win64, win32, linux64, aarch64-linux and "
-            "one universal darwin64) and sources/ from which 'fmpy compile' rebuilds it. "
-            "The FMI headers come from the installed fmpy."
+            "Write a co-simulation FMU holding modelDescription.xml, binaries and sources/ "
+            "from which 'fmpy compile' rebuilds it (FMI headers from the installed fmpy). "
+            "With the optional cross compiler (pip install '.[platforms]': PyPI ziglang) it "
+            "carries a binary for each of six platforms (FMI 3: x86_64-windows, x86-windows, "
+            "x86_64-linux, aarch64-linux, x86_64-darwin, aarch64-darwin; FMI 2: win64, win32, "
+            "linux64, aarch64-linux, one universal darwin64); without it, this machine's "
+            "binary, compiled by the C compiler found ($CC, gcc, cc or clang). "
+            "Details: docs/platforms.md."
         ),
     )
     p.add_argument("--fmi-version", type=int, choices=(2, 3), required=True,
                    help="FMI version of the FMU")
     add_out_option(p, "build", kind="file", required=True)
-    p.add_argument("--platforms", default="all", metavar="host|all|LIST",
-                   help="platforms to carry binaries for: all (default), host (this "
-                        "machine's), or a comma-separated list of FMI 3 platform tuples, "
-                        "e.g. x86_64-linux,x86_64-windows")
+    p.add_argument("--platforms", default=None, metavar="host|all|LIST",
+                   help="platforms to carry binaries for: all, host (this machine's), or a "
+                        "comma-separated list of FMI 3 platform tuples, e.g. "
+                        "x86_64-linux,x86_64-windows (default: all when ziglang is installed, "
+                        f"else host; here: {default_platforms()})")
     p.add_argument("--cc", default=None, metavar="CC",
                    help="a C compiler (e.g. gcc) for the binary of the platform it builds for "
                         "(as 'CC -dumpmachine' says; that platform must be among "
-                        "--platforms); the other binaries come from zig (default: zig for all)")
+                        "--platforms); the other binaries come from zig (default: zig for all; "
+                        "without ziglang, the compiler found: $CC, gcc, cc or clang)")
     p.add_argument("--no-validate", action="store_true",
                    help="skip fmpy.validation.validate_fmu on the result")
+    p.add_argument("-q", "--quiet", action="store_true",
+                   help="no progress lines (the result line and errors still print)")
     p.set_defaults(func=interruptible(run))
 
 
@@ -47,11 +63,23 @@ def run(args: argparse.Namespace) -> int:
     :func:`harness.cli.main` (message and exit status).
     """
     out: Path = args.out
+    platforms = args.platforms or default_platforms()
+    quiet = getattr(args, "quiet", False)
+
+    def say(line: str) -> None:
+        if not quiet:
+            print(line, flush=True)
+
     try:
+        names = resolve_platforms(platforms)
+        ccs = compilers(names, args.cc)
+        compilers_used = ", ".join(sorted({"zig" if c == ZIG else c for c in ccs.values()}))
+        say(f"building the FMI {args.fmi_version}.0 FMU for {', '.join(names)} "
+            f"({compilers_used})")
         # built next to the destination, then renamed over it: never a partial file
         with OutputSet(out.parent) as o:
-            build_fmu(args.fmi_version, o.path(out.name), platforms=args.platforms,
-                      cc=args.cc)
+            build_fmu(args.fmi_version, o.path(out.name), platforms=names, cc=args.cc,
+                      progress=say)
             (path,) = o.commit()
     except BuildError as e:
         raise CommandError(1, str(e)) from None
@@ -64,7 +92,9 @@ def run(args: argparse.Namespace) -> int:
         if problems:
             raise CommandError(1, f"{path} does not validate:\n"
                                   + "\n".join(f"  - {prob}" for prob in problems))
-    names = ", ".join(resolve_platforms(args.platforms))
-    print(f"wrote {path} (FMI {args.fmi_version}.0 co-simulation, validated; binaries for "
-          f"{names})")
+    checked = "" if args.no_validate else ", validated"
+    print(f"wrote {path} (FMI {args.fmi_version}.0 co-simulation{checked}; binaries for "
+          f"{', '.join(names)})")
+    if len(names) < len(ALL_PLATFORMS) and not zig_available():
+        print(f"this machine's binary only: {PLATFORMS_HINT}")
     return 0

@@ -11,7 +11,7 @@ from tqdm import tqdm
 from ..files import OutputSet, save_figure, write_csv
 from ..fmu.runner import FMUError
 from ..peers.compare import ALL_PEERS, PEERS, compare_scenario, stationary_variant
-from ..peers.ruckig_ref import ruckig_available
+from ..peers.ruckig_ref import COMPARE_HINT, ruckig_available
 from ..peers.timeopt import measure
 from ._common import (
     CommandError,
@@ -108,7 +108,7 @@ succeeded:
   <name>-runs.png         acceleration and deflection of every method
   timeopt.csv             the random moves (with --timeopt)
   summary.txt             the tables printed on screen
-Needs the optional dependency ruckig (pip install 'djl-fmu[compare]').
+Needs the optional dependency ruckig (pip install '.[compare]' from a checkout).
 """
 
 EPILOG = """\
@@ -180,7 +180,7 @@ def run(args: argparse.Namespace) -> int:
     # 1. check everything first
     if not ruckig_available():
         raise CommandError(2, "needs the 'ruckig' package for the time-optimal reference: "
-                              "pip install 'djl-fmu[compare]'")
+                              + COMPARE_HINT)
     peers = PEERS
     if args.peers:
         peers = tuple(x.strip() for x in args.peers.split(",") if x.strip())

@@ -60,7 +60,7 @@ Running on a Dask cluster:
   dask scheduler                               # prints its address, tcp://HOST:8786
   dask worker tcp://HOST:8786 --nworkers 4 --nthreads 1   # on every machine (4 cores)
   djl-fmu map X --scheduler tcp://HOST:8786
-Every worker needs this package installed (pip install djl-fmu, same version);
+Every worker needs this package installed (pip install . from the same checkout);
 with --engine fmu and a scenario that names its own FMU file, the file must
 exist at the same path on the workers.
 """

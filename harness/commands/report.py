@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from ..claims import CATALOGUE
 from ..fmu.build import BuildError, default_fmu
 from ..fmu.runner import check_fmu_binary, check_fmu_variables
-from ..report import print_failures, write_report
+from ..peers.ruckig_ref import ruckig_available
+from ..report import PEERS_SKIPPED, print_failures, write_report
 from ._common import CommandError, add_out_option, check_out_dir, check_out_file, interruptible
 
 
@@ -103,6 +105,9 @@ def run(args: argparse.Namespace) -> int:
         + (["--claims", ",".join(map(str, args.claims))] if args.claims else [])
         + (["--no-peers"] if args.no_peers else [])
         + (["--fmu", str(args.fmu)] if args.fmu else ["--fmi-version", str(args.fmi_version)]))
+    peers = not args.no_peers and args.claims is None
+    if peers and not ruckig_available():
+        print(f"warning: {PEERS_SKIPPED}", file=sys.stderr, flush=True)
     try:
         summary = write_report(out, fast=args.fast, fmi_version=args.fmi_version,
                                fmu=args.fmu, only=args.claims, embed=not args.figures_beside,

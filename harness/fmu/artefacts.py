@@ -1,4 +1,4 @@
-"""Artefacts of a reference FMU beside its binaries (issue #11, item 4).
+"""Artefacts of a reference FMU beside its binaries.
 
 :func:`write_artefacts` adds to an unpacked FMU folder:
 

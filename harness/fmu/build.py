@@ -2,9 +2,11 @@
 
 The FMU carries a binary for each chosen platform and the C sources from which
 any importer (``fmpy compile``) can rebuild it.  Binaries for every platform are
-cross-compiled on this machine by the clang of PyPI's ``ziglang`` (a dependency);
-the host's own compiler (``gcc`` by default in :func:`default_fmu`) still builds
-the binary of the platform it targets.  The platform folder of a binary is read
+cross-compiled on this machine by the clang of PyPI's ``ziglang`` (the optional
+``[platforms]`` extra); without it, the host's binary comes from the C compiler
+found on this machine (:func:`host_compiler`), and the host's own compiler
+(``gcc`` by default in :func:`default_fmu`) may always build the binary of the
+platform it targets.  The platform folder of a binary is read
 from the binary itself (ELF, PE or Mach-O header), never assumed from the host.
 
 The FMI headers are the ones that ship with fmpy (``fmpy/c-code``): nothing
@@ -21,8 +23,9 @@ import struct
 import subprocess
 import sys
 import tempfile
+import time
 import zipfile
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -192,6 +195,20 @@ def model_description(fmi_version: int) -> Path:
 # ----------------------------------------------------------------------------- compilers
 
 
+PLATFORMS_HINT = ("for all six platforms install the optional cross compiler: "
+                  "pip install '.[platforms]' in the source checkout "
+                  "(or pip install 'ziglang>=0.17.1,<0.18')")
+"""How to get the binaries of every platform, for messages."""
+
+HOST_COMPILERS = ("gcc", "cc", "clang")
+"""C compilers :func:`host_compiler` looks for on ``PATH``, in order, after ``$CC``."""
+
+
+def zig_available() -> bool:
+    """Whether PyPI's ``ziglang`` (the ``[platforms]`` extra) is installed."""
+    return importlib.util.find_spec("ziglang") is not None
+
+
 def zig_command() -> list[str]:
     """Command line that runs zig's C compiler (``python -m ziglang cc``).
 
@@ -200,11 +217,33 @@ def zig_command() -> list[str]:
     BuildError
         If PyPI's ``ziglang`` is not installed.
     """
-    if importlib.util.find_spec("ziglang") is None:
-        raise BuildError("the cross compiler of PyPI's 'ziglang' builds the FMU's binaries and is "
-                         "not installed: pip install ziglang (or build the host's binary only: "
-                         "--platforms host --cc gcc)")
+    if not zig_available():
+        raise BuildError("the cross compiler of PyPI's 'ziglang' builds the binaries of other "
+                         f"platforms than this one and is not installed: {PLATFORMS_HINT}; or "
+                         "build the host's binary only (--platforms host)")
     return [sys.executable, "-m", "ziglang", "cc"]
+
+
+def default_platforms() -> str:
+    """Return what ``djl-fmu build`` builds by default: ``"all"`` with zig, else ``"host"``."""
+    return "all" if zig_available() else "host"
+
+
+def host_compiler() -> str:
+    """Return the C compiler for the host's binary without zig: ``$CC``, else gcc, cc, clang.
+
+    Raises
+    ------
+    BuildError
+        If none is found: the message says what to install.
+    """
+    env = os.environ.get("CC", "").strip()
+    for cc in ((env,) if env else ()) + HOST_COMPILERS:
+        if shutil.which(cc):
+            return cc
+    raise BuildError("no C compiler found to build the FMU's binary for this machine (looked "
+                     f"for $CC, {', '.join(HOST_COMPILERS)}): install one (e.g. apt-get install "
+                     f"gcc), or {PLATFORMS_HINT}")
 
 
 def check_compiler(cc: str = "gcc") -> str:
@@ -397,6 +436,8 @@ def compilers(platforms: Sequence[str], cc: str | None = None) -> dict[str, str]
         If ``cc`` builds for none of ``platforms``.
     """
     chosen = {p: ZIG for p in platforms}
+    if cc is None and not zig_available():
+        cc = host_compiler()
     if cc is not None and cc != ZIG:
         own = compiler_platform(cc)
         if own not in chosen:
@@ -404,16 +445,43 @@ def compilers(platforms: Sequence[str], cc: str | None = None) -> dict[str, str]
                              f"platforms to build ({', '.join(platforms)}): add it to the "
                              f"platforms, or leave the compiler to zig")
         chosen[own] = cc
+    if not zig_available():
+        need = [p for p, c in chosen.items() if c == ZIG]
+        if need:
+            raise BuildError(f"no compiler for {', '.join(need)} here: {PLATFORMS_HINT}; or "
+                             f"build the host's binary only (--platforms host)")
     return chosen
 
 
+def _runtime_marker(platform: str) -> Path:
+    """File recording that zig has compiled its C runtime for ``platform`` on this machine."""
+    return cache_dir() / "zig-runtimes" / PLATFORMS[platform].zig_target
+
+
+def first_zig_builds(ccs: dict[str, str]) -> list[str]:
+    """Platforms that zig builds here for the first time (its C runtime not compiled yet).
+
+    zig compiles a target's C runtime (MinGW's for Windows: minutes on a small machine) on
+    first use and caches it (``~/.cache/zig``); a marker under :func:`cache_dir` records each
+    target built, so only a first build is announced (a cleared zig cache is not noticed).
+    """
+    return [p for p, c in ccs.items() if c == ZIG and not _runtime_marker(p).is_file()]
+
+
 def build_binaries(fmi_version: int, root: Path, platforms: str | Sequence[str] = "host", *,
-                   cc: str | None = None, extra_cflags: tuple[str, ...] = ()) -> list[Path]:
+                   cc: str | None = None, extra_cflags: tuple[str, ...] = (),
+                   progress: Callable[[str], None] | None = None) -> list[Path]:
     """Compile the binaries of ``platforms`` into the unpacked FMU folder ``root``.
 
     Each platform's binary goes to ``binaries/<folder>/<modelIdentifier><ext>``: the
     FMI 3 tuple, or the FMI 2 name (``win64``, ``win32``, ``linux64``, ``aarch64-linux``,
     ``darwin64``; both macOS binaries make one universal ``darwin64`` library).
+
+    Parameters
+    ----------
+    progress : callable, optional
+        Called with a line of text: before a first zig build of a platform (its C runtime
+        is compiled once), and as each platform's binary is done (compiler, seconds).
 
     Returns
     -------
@@ -423,13 +491,27 @@ def build_binaries(fmi_version: int, root: Path, platforms: str | Sequence[str] 
     _check_version(fmi_version)
     names = resolve_platforms(platforms)
     ccs = compilers(names, cc)
+    first = first_zig_builds(ccs)
+    if progress is not None and first:
+        progress(f"first build here for {', '.join(first)}: zig compiles the C runtime of "
+                 "each once (the two Windows runtimes take minutes on a small machine, "
+                 "other jobs running: up to a quarter of an hour); later builds take seconds")
     with tempfile.TemporaryDirectory(prefix="djl-fmu-bin-") as tmp:
         thin = {p: Path(tmp) / p / (spec.MODEL_IDENTIFIER + PLATFORMS[p].extension)
                 for p in names}
 
         def one(p: str) -> Path:
-            return compile_binary(fmi_version, thin[p], cc=ccs[p], extra_cflags=extra_cflags,
-                                  platform=p)
+            t0 = time.perf_counter()
+            out = compile_binary(fmi_version, thin[p], cc=ccs[p], extra_cflags=extra_cflags,
+                                 platform=p)
+            if ccs[p] == ZIG:
+                marker = _runtime_marker(p)
+                marker.parent.mkdir(parents=True, exist_ok=True)
+                marker.touch()
+            if progress is not None:
+                who = "zig" if ccs[p] == ZIG else ccs[p]
+                progress(f"  {p}: built by {who} in {time.perf_counter() - t0:.1f} s")
+            return out
 
         workers = max(1, min(len(names), os.cpu_count() or 1))
         with ThreadPoolExecutor(max_workers=workers) as pool:
@@ -451,7 +533,8 @@ def build_binaries(fmi_version: int, root: Path, platforms: str | Sequence[str] 
 
 def build_fmu(fmi_version: int, out_path: str | os.PathLike, *,
               platforms: str | Sequence[str] = "host", cc: str | None = None,
-              extra_cflags: tuple[str, ...] = ()) -> Path:
+              extra_cflags: tuple[str, ...] = (),
+              progress: Callable[[str], None] | None = None) -> Path:
     """Write a complete co-simulation FMU to ``out_path``.
 
     Parameters
@@ -467,9 +550,12 @@ def build_fmu(fmi_version: int, out_path: str | os.PathLike, *,
     cc : str, optional
         A C compiler (``gcc``) for the binary of the platform it builds for (which must
         be among ``platforms``); every other binary, and all of them by default, comes
-        from zig's clang (:data:`ZIG`).
+        from zig's clang (:data:`ZIG`).  Without ``ziglang`` installed, the host's binary
+        comes from :func:`host_compiler` by default, and no other platform can be built.
     extra_cflags : tuple of str
         Extra compiler flags (e.g. sanitizers).
+    progress : callable, optional
+        Receives progress lines (see :func:`build_binaries`).
 
     Returns
     -------
@@ -485,13 +571,15 @@ def build_fmu(fmi_version: int, out_path: str | os.PathLike, *,
         root = Path(tmp) / "fmu"
         (root / "sources").mkdir(parents=True)
         (root / "documentation").mkdir()
-        shutil.copyfile(model_description(fmi_version), root / "modelDescription.xml")
+        (root / "modelDescription.xml").write_text(
+            stamped_model_description(fmi_version), encoding="utf-8")
         for f in source_files(fmi_version):
             shutil.copyfile(f, root / "sources" / f.name)
         if fmi_version == 3:
             shutil.copyfile(modeldesc_dir() / "fmi3" / "buildDescription.xml",
                             root / "sources" / "buildDescription.xml")
-        build_binaries(fmi_version, root, names, cc=cc, extra_cflags=extra_cflags)
+        build_binaries(fmi_version, root, names, cc=cc, extra_cflags=extra_cflags,
+                       progress=progress)
         write_artefacts(root, fmi_version)
         tmp_zip = out_path.with_name(out_path.name + f".tmp{os.getpid()}")
         try:
@@ -503,6 +591,33 @@ def build_fmu(fmi_version: int, out_path: str | os.PathLike, *,
         finally:
             tmp_zip.unlink(missing_ok=True)
     return out_path
+
+
+def generation_date() -> str:
+    """Return the FMU's ``generationDateAndTime``: now in UTC, or ``$SOURCE_DATE_EPOCH``'s date.
+
+    The format is the one FMI asks for, ``YYYY-MM-DDThh:mm:ssZ``; ``SOURCE_DATE_EPOCH`` (the
+    reproducible-builds convention, seconds since 1970) makes two builds byte-identical.
+    """
+    from datetime import datetime, timezone
+
+    epoch = os.environ.get("SOURCE_DATE_EPOCH", "").strip()
+    when = (datetime.fromtimestamp(int(epoch), tz=timezone.utc) if epoch.isdigit()
+            else datetime.now(tz=timezone.utc))
+    return when.strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def stamped_model_description(fmi_version: int) -> str:
+    """Return the committed model description with ``generationDateAndTime`` of this build.
+
+    The committed files (``modeldesc/``) carry no date, so that regenerating them from the
+    spec changes nothing; the date is the FMU's, added as the FMU is written.
+    """
+    text = model_description(fmi_version).read_text(encoding="utf-8")
+    tool = f'generationTool="{codegen.GENERATION_TOOL}"'
+    if tool not in text:
+        raise BuildError(f"{model_description(fmi_version)}: no {tool} to date")
+    return text.replace(tool, f'{tool} generationDateAndTime="{generation_date()}"', 1)
 
 
 def _sources_digest(fmi_version: int, cc: str, extra_cflags: tuple[str, ...]) -> str:

@@ -271,6 +271,8 @@ def _fmi2_entries() -> list[tuple[str, int, Variable]]:
     for v in VARIABLES:
         for name, vr in spec.fmi2_scalars(v):
             out.append((name, vr, v))
+    # the Integer aliases of the enumerations last: the other variables keep their indices
+    out += [(v.name, v.vr, v) for v in spec.fmi2_integer_aliases()]
     return out
 
 
@@ -363,12 +365,12 @@ def fmi2_model_description() -> str:
     x.append("  </ModelVariables>")
     x.append("  <ModelStructure>")
     x.append("    <Outputs>")
-    # no states; an output depends on the inputs (a command acts from the first sample at or
-    # after the communication point: docs/generator.md, "Commanded moves")
-    deps2 = " ".join(str(index[name]) for name, _, v in entries if v.causality == "input")
+    # no states and no direct feedthrough: an input set at a communication point acts from
+    # the first sample the next step computes (docs/generator.md, "Commanded moves"), so an
+    # output depends on none of the knowns at the communication point
     for name, _, v in entries:
         if v.causality == "output":
-            x.append(f"      <Unknown{_attrs(index=index[name], dependencies=deps2)}/>")
+            x.append(f"      <Unknown{_attrs(index=index[name], dependencies='')}/>")
     x.append("    </Outputs>")
     x.append("    <InitialUnknowns>")
     for name, _, v in entries:
@@ -466,11 +468,11 @@ def fmi3_model_description() -> str:
             x.append(f"    <{typ}{_attrs(**attrs)}/>")
     x.append("  </ModelVariables>")
     x.append("  <ModelStructure>")
-    # no states; an output depends on the inputs (as in FMI 2)
-    deps3 = " ".join(str(v.vr) for v in VARIABLES if v.causality == "input")
+    # no states and no direct feedthrough (as in FMI 2): an empty list, so no importer has
+    # value references to resolve
     for v in VARIABLES:
         if v.causality == "output":
-            x.append(f"    <Output{_attrs(valueReference=v.vr, dependencies=deps3)}/>")
+            x.append(f"    <Output{_attrs(valueReference=v.vr, dependencies='')}/>")
     for v in VARIABLES:
         if (v.causality == "output" and v.initial in ("approx", "calculated")) or (
             v.causality == "calculatedParameter"

@@ -453,14 +453,15 @@ class GeneratorFMU:
 
     def set_inputs(self, *, target: float | None = None, execute: bool | None = None,
                    stop: bool | None = None, f_mode: float | None = None) -> None:
-        """Set the commanded inputs (issue #12); the next :meth:`do_step` reads them.
+        """Set the commanded inputs; the next :meth:`do_step` reads them.
 
         Only the inputs given are set; the others keep their values.  The FMU
         reads them at its next ``doStep``: a rising edge of ``execute`` (against
         the value seen at the previous ``doStep``) moves from the current state
         to ``target``, ending at rest; a rising edge of ``stop`` brings the axis
         to rest (stop wins over execute at the same step); ``f_mode`` (Hz) gives
-        the jerk time of each constant-jerk stage when ``jerk_source = 2``.  A
+        the jerk time of each constant-jerk stage when ``jerk_source = 2`` (``3``: extrapolated
+        to the stages to come) and times the impulses when ``shaper_source = 2``.  A
         command takes effect at the first generator sample at or after the
         current time.  Setting ``execute=True`` twice without a ``False`` in
         between is no new edge: send ``execute=False`` at a later step first.
@@ -474,7 +475,8 @@ class GeneratorFMU:
         stop : bool, optional
             Come to rest on a rising edge.
         f_mode : float, optional
-            Mode frequency (Hz), used when ``jerk_source = 2``.
+            Mode frequency (Hz), used when ``jerk_source`` is 2 or 3 or ``shaper_source``
+            is 2.
 
         Raises
         ------
@@ -761,7 +763,7 @@ def _convert(name: str, kind: str, x: Any) -> Any:
     if kind == "Integer":
         if isinstance(x, (int, np.integer)):
             v = int(x)
-        else:  # a float, even 2.0, is refused: strict types (issue #10)
+        else:  # a float, even 2.0, is refused: strict types
             raise TypeError(f"{name}: an Integer variable takes an int, got {x!r} (a float is "
                             f"not rounded, truncated or taken for an integer)")
         if not _INT32[0] <= v <= _INT32[1]:

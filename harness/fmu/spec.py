@@ -5,7 +5,7 @@ header of value references (``fmu_src/djl_vars.h``) are generated from
 :data:`VARIABLES` by :mod:`harness.fmu.codegen`; a test regenerates them and
 fails if the committed files differ.
 
-Names, units and meanings of the variables listed in issue #2 are a contract
+Names, units and meanings of the first variables (time .. done) are a contract
 with users: extend the list, never rename.
 """
 
@@ -272,8 +272,10 @@ VARIABLES: tuple[Variable, ...] = (
     _i("stop", 52, "Boolean", False, "Rising edge: come to rest with d_max and the stages' jerk "
        "times (wins over execute at the same step); the axis then waits for execute"),
     _i("f_mode", 53, "Real", 10.0, "Frequency of the vibration mode, used when jerk_source = 2 "
-       "(its period is the jerk time of the stages that start) and when shaper_source = 2 (its "
-       "phase times the shaper's impulses)", "Hz", variability="continuous", positive=True),
+       "(its period is the jerk time of the stages that start), when jerk_source = 3 (the same, "
+       "f_mode extrapolated at its rate of change to the stages still to come) and when "
+       "shaper_source = 2 (its phase times the shaper's impulses); ignored otherwise", "Hz",
+       variability="continuous", positive=True),
     _c("motion_time", 40, "Real", "Duration of the motion, filters included (ends at "
        "t_start + motion_time); with a shaper, until its last delayed copy ends (the "
        "shaper's largest delay added)", "s"),
@@ -326,6 +328,35 @@ OUTPUTS = tuple(v for v in VARIABLES if v.causality == "output")
 CALCULATED = tuple(v for v in VARIABLES if v.causality == "calculatedParameter")
 BY_NAME = {v.name: v for v in VARIABLES}
 
+
+FMI2_ENUM_ALIAS_SUFFIX = "_code"
+"""Suffix of the FMI 2 Integer alias of each Enumeration parameter (``profile_code``, ...)."""
+
+
+def fmi2_integer_aliases() -> tuple[Variable, ...]:
+    """Integer aliases of the Enumeration parameters, declared in the FMI 2 model description only.
+
+    Some FMI 2 importers (those built on the FMI Library: libcosim, ecos) skip Enumeration
+    variables, so ``profile``, ``short_stage``, ``jerk_source``, ``shaper`` and
+    ``shaper_source`` could not be set there.  FMI 2.0 (section 2.2.7, ``valueReference``)
+    makes a value reference unique per base type "Real, Integer/Enumeration, Boolean, String"
+    except for alias variables: an Integer with the value reference of an Enumeration is an
+    alias of it, the same value read and written with ``fmi2SetInteger`` /
+    ``fmi2GetInteger``.  Each alias is ``<name>_code``, declared after every other variable
+    (the indices of ``<ModelStructure>`` do not move); FMI 3 has none (its ``<Alias>`` keeps
+    the type).
+    """
+    out = []
+    for v in VARIABLES:
+        if v.type != "Enumeration" or v.causality != "parameter":
+            continue
+        items = ", ".join(f"{value} = {item}" for item, value, _ in ENUMERATIONS[v.declared_type])
+        desc = (f"Integer alias of the Enumeration {v.name} (same value reference), for "
+                f"importers that skip FMI 2 Enumeration variables: {items}")
+        out.append(Variable(v.name + FMI2_ENUM_ALIAS_SUFFIX, v.vr, "Integer", v.causality,
+                            v.variability, desc, None, v.start, v.initial, 1,
+                            min=v.min, max=v.max))
+    return tuple(out)
 
 
 def fmi2_scalars(var: Variable) -> list[tuple[str, int]]:

@@ -2,7 +2,7 @@
 
 ruckig (Berscheid & Kröger 2021) computes time-optimal jerk-limited
 trajectories from any state.  It is an optional dependency of the comparison
-only (``pip install djl-fmu[compare]``), never of the FMU: it is imported when
+only (``pip install '.[compare]'`` from a checkout), never of the FMU: it is imported when
 first needed, with a clear error if it is missing.
 
 Only rest-to-rest, one-axis moves are used here.
@@ -19,6 +19,9 @@ from ..errors import HarnessError
 from .context import PeerContext, PeerSpec, placed
 from .trajectory import PiecewiseJerk, SampledTrajectory
 
+COMPARE_HINT = "pip install '.[compare]' in the source checkout (or pip install ruckig)"
+"""How to install the optional ruckig, for messages."""
+
 
 class RuckigMissingError(HarnessError, ImportError):
     """ruckig is not installed."""
@@ -30,7 +33,7 @@ def _ruckig() -> Any:
     except ImportError as e:  # pragma: no cover - depends on the environment
         raise RuckigMissingError(
             "the comparison with the time-optimal trajectory needs the 'ruckig' package: "
-            "pip install 'djl-fmu[compare]' (or pip install ruckig)"
+            + COMPARE_HINT
         ) from e
     return ruckig
 

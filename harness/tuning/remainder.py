@@ -1,4 +1,4 @@
-"""Why the paper's tuning rule leaves a remainder: closed forms (issue #9, point 4).
+"""Why the paper's tuning rule leaves a remainder: closed forms.
 
 The paper (Béarée & Olabi 2013, §3.1, eq. 20-21) tunes each constant-jerk
 stage to the modal period, which cancels the stage's vibration on an
@@ -202,7 +202,7 @@ def stage_remainder_first_order(T_F: ArrayLike, f: ArrayLike,
     form: expanding the square root of eq. 20 is not uniform near x = 2π).
     At x = 2πk it is exactly ζ: the first jerk kink's response decays by
     e^{−ζωT_F} ≈ 1 − ζωT_F before the second kink cancels it, a mismatch of
-    ζωT_F·(A/T_F)/ω³ = ζ·A/ω² — the issue's "about ζ·A/ω²" holds, to first
+    ζωT_F·(A/T_F)/ω³ = ζ·A/ω² — the estimate "about ζ·A/ω²" holds, to first
     order (the exact value is ζ(1 − πζ + …)·A/(ωω_d), 9 % lower at ζ = 0.03).
     The error is O(ζ²).
 

@@ -1,4 +1,4 @@
-"""Jerk times tuned on the time-varying model: ``optimal`` and ``robust`` (issue #9).
+"""Jerk times tuned on the time-varying model: ``optimal`` and ``robust``.
 
 The paper's rule (:func:`harness.tuning.rule.tune_djl`: each jerk time = the modal
 period at the start of its stage) cancels each stage's vibration only to first
