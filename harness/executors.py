@@ -26,11 +26,13 @@ from __future__ import annotations
 
 import asyncio
 import os
+import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import (
     Executor,
     Future,
+    InvalidStateError,
     ProcessPoolExecutor,
     ThreadPoolExecutor,
     as_completed,
@@ -103,9 +105,6 @@ def _quiet_cancelled_pool_errors() -> None:
     those futures any more: the error is dropped, every other thread exception is printed
     as before.  Installed once, on the first interrupted pool.
     """
-    import threading
-    from concurrent.futures import InvalidStateError
-
     previous = threading.excepthook
     if getattr(previous, "_djl_quiet", False):
         return
