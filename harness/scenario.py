@@ -91,6 +91,7 @@ Format (all lengths in m, times in s, frequencies in Hz)::
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import itertools
 import math
 import sys
@@ -536,8 +537,6 @@ class _Table:
 
 def _close_key(key: str, candidates: list[str], *, cutoff: float) -> str | None:
     """Return the candidate closest to ``key`` (case and underscores ignored), if any is close."""
-    import difflib
-
     def norm(x: str) -> str:
         return x.lower().replace("_", "").replace("-", "")
 

@@ -28,6 +28,7 @@ import zipfile
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from datetime import datetime, timezone
 from pathlib import Path
 
 from .._resources import fmu_src_dir, modeldesc_dir
@@ -599,8 +600,6 @@ def generation_date() -> str:
     The format is the one FMI asks for, ``YYYY-MM-DDThh:mm:ssZ``; ``SOURCE_DATE_EPOCH`` (the
     reproducible-builds convention, seconds since 1970) makes two builds byte-identical.
     """
-    from datetime import datetime, timezone
-
     epoch = os.environ.get("SOURCE_DATE_EPOCH", "").strip()
     when = (datetime.fromtimestamp(int(epoch), tz=timezone.utc) if epoch.isdigit()
             else datetime.now(tz=timezone.utc))
