@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import asyncio
 import os
+import sys
 import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
@@ -346,6 +347,61 @@ def _probe(address: str, timeout: float) -> str:
     finally:
         pool.shutdown(wait=False)
     return str(info.get("type", "server")) if isinstance(info, dict) else "server"
+
+
+class LineProgress:
+    """A tqdm-like progress for a log (not a terminal): a line now and then on stderr.
+
+    ``update(n)`` counts; a line is printed at the first update, then at most every
+    ``interval`` seconds, and at ``close()`` (the total and the time taken).
+
+    Parameters
+    ----------
+    total : int
+        What will be counted.
+    desc : str
+        Start of each line, e.g. ``map X``.
+    unit : str
+        What is counted, e.g. ``moves``.
+    interval : float
+        Least time between two lines (s).
+    stream : file, optional
+        Where to print (default: ``sys.stderr`` at each line).
+    """
+
+    def __init__(self, total: int, desc: str, unit: str = "moves", interval: float = 10.0,
+                 stream: Any = None) -> None:
+        self.total, self.desc, self.unit, self.interval = total, desc, unit, interval
+        self.stream = stream
+        self.n = 0
+        self._t0 = time.perf_counter()
+        self._last: float | None = None
+        self._printed = -1
+
+    def _line(self, final: bool = False) -> None:
+        el = time.perf_counter() - self._t0
+        text = f"{self.desc}: {self.n}/{self.total} {self.unit}"
+        if final:
+            text += f" done in {el:.1f} s"
+        else:
+            text += f" ({100.0 * self.n / max(self.total, 1):.0f} %), {el:.0f} s"
+            if 0 < self.n < self.total:
+                text += f", about {el * (self.total - self.n) / self.n:.0f} s left"
+        print(text, file=self.stream or sys.stderr, flush=True)
+        self._printed = self.n
+
+    def update(self, n: int = 1) -> None:
+        """Count ``n`` more; print a line if the last one is ``interval`` old."""
+        self.n += n
+        now = time.perf_counter()
+        if self.n < self.total and (self._last is None or now - self._last >= self.interval):
+            self._last = now
+            self._line()
+
+    def close(self) -> None:
+        """Print the last line (how many, how long) once all are counted; else nothing."""
+        if self.n >= self.total:
+            self._line(final=True)
 
 
 def run_batches(ex: Executor, task: Callable[..., Any], args: Sequence[Any],

@@ -497,6 +497,28 @@ def write_text(path: str | os.PathLike[str], text: str) -> Path:
     return path
 
 
+def write_mat(path: str | os.PathLike[str], variables: Mapping[str, Any]) -> Path:
+    """Write a MATLAB file (:func:`scipy.io.savemat`, format 5) atomically; return its path.
+
+    ``variables`` maps variable names to arrays, strings or dicts (MATLAB structs); a
+    temporary file beside ``path`` is renamed over it once complete.
+    """
+    from scipy.io import savemat  # deferred: scipy is heavy to import
+
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            savemat(fh, dict(variables), long_field_names=True, do_compression=True,
+                    oned_as="column")
+        os.chmod(tmp, _umask_mode())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
 def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int = 110) -> Path:
     """Save a matplotlib figure atomically (temporary file, then rename) and close it."""
     import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import

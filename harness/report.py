@@ -49,10 +49,12 @@ th, td { border: 1px solid #ccc; padding: 3px 7px; text-align: left; vertical-al
 th { background: #f3f3f3; }
 td.num { text-align: right; font-family: monospace; white-space: nowrap; }
 .PASSED { color: #0a7d28; font-weight: bold; } .FAILED { color: #c0161b; font-weight: bold; }
+.REFUTED { color: #9a5b00; font-weight: bold; }
 .ERROR { color: #fff; background: #c0161b; font-weight: bold; padding: 0 4px; }
 .badge { font-size: 0.75em; padding: 2px 8px; border-radius: 4px; margin-left: 0.6em;
          vertical-align: middle; }
 .badge.PASSED { background: #d9f2df; } .badge.FAILED { background: #fbdcdc; }
+.badge.REFUTED { background: #fdecc8; }
 blockquote { margin: 0.6em 0; padding: 0.4em 1em; background: #f7f7f4;
              border-left: 4px solid #bbb; }
 .meta { color: #555; font-size: 0.9em; } .kind { color: #555; font-size: 0.85em; }
@@ -120,10 +122,16 @@ def _versions() -> str:
     return f"djl-fmu {__version__}; " + ", ".join(parts)
 
 
+_BADGE = {"PASSED": "PASSED", "REFUTED": "paper statement refuted (product checks passed)",
+          "FAILED": "FAILED: product check", "ERROR": "ERROR: not computed"}
+"""The claim's badge: a refuted paper statement is a finding, apart from a failed product
+check (a defect)."""
+
+
 def _claim_section(r: ClaimResult, img_src: Callable[[int, int, bytes], str]) -> str:
     out = [f'<h2 id="claim{r.number}">Claim {r.number}: {_e(r.title)}'
-           f'<span class="badge {r.verdict if r.verdict != "ERROR" else "FAILED"}">'
-           f'{r.verdict}</span></h2>']
+           f'<span class="badge {r.status if r.status != "ERROR" else "FAILED"}">'
+           f'{_BADGE[r.status]}</span></h2>']
     n_prod = [c for c in r.checks if c.kind == "product"]
     n_paper = [c for c in r.checks if c.kind == "paper"]
     out.append(f'<p class="meta">Source: {_e(r.source)} &middot; '
@@ -257,7 +265,7 @@ def render_html(results: Sequence[ClaimResult], *, settings: Settings, elapsed: 
             f"<tr><td><a href='#claim{r.number}'>{r.number}</a></td><td>{_e(r.title)}</td>"
             f"<td>{_e(r.source)}</td><td class='num'>{sum(c.passed for c in prod)}/{len(prod)}"
             f"</td><td class='num'>{sum(c.passed for c in pap)}/{len(pap)}</td>"
-            f"<td class='{r.verdict}'>{r.verdict}</td><td class='num'>{r.elapsed:.1f} s</td>"
+            f"<td class='{r.status}'>{r.status}</td><td class='num'>{r.elapsed:.1f} s</td>"
             "</tr>")
     failed = [(r, c) for r in results for c in r.checks if not c.passed]
     failed_html = "".join(f"<li>claim {r.number} ({_e(c.kind)}): {_e(c.describe())}</li>"

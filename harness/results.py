@@ -27,6 +27,7 @@ import numpy as np
 from .files import write_csv
 from .metrics import PAPER_BAND_LABEL, Table2Stats, change_percent, percent_of, table2_stats
 from .simulation.plots import PEAK_LABEL, plot_runs
+from .tables import SIGNAL_COLUMNS, TableMixin, columns_of, mat_variables, to_pandas
 
 __all__ = [
     "ProfileOutcome",
@@ -123,7 +124,7 @@ def _pct(v: float, signed: bool = False) -> str:
 
 
 @dataclass
-class ScenarioResult:
+class ScenarioResult(TableMixin):
     """AL / JL / DJL on one move: what Table 1 of the paper reports.
 
     Attributes
@@ -432,6 +433,98 @@ class ScenarioResult:
         """Write :meth:`rows` as CSV; return the path."""
         return write_csv(path, self.rows())
 
+    # ------------------------------------------------------------ tables
+
+    @property
+    def has_signals(self) -> bool:
+        """Whether the time series were kept (single moves; not the cases of a sweep)."""
+        return any(p.run is not None for p in self.profiles.values())
+
+    def signals(self) -> dict[str, np.ndarray]:
+        """Every profile's time series as the columns of ``<scenario>-signals.csv``.
+
+        ``t_s``; ``z_m`` and ``f_Hz``, the Z position and the tuned mode's frequency
+        in the first profile's run; then, for each profile ``P``: ``P_x_m``,
+        ``P_v_m_s``, ``P_a_m_s2``, ``P_j_m_s3`` (reference of the excited axis),
+        ``P_eps_m`` (deflection ε of the load) and ``P_z_m``, ``P_f_Hz`` (its own Z
+        position and tuned-mode frequency: the Z move ends with the excited axis,
+        so they depend on the profile).
+
+        The runs share the sampling; the table spans the longest record, the shorter
+        runs continued at rest (:meth:`CoSimResult.to_table
+        <harness.simulation.master.CoSimResult.to_table>`).
+
+        Raises
+        ------
+        ValueError
+            If no time series was kept (a sweep's case) or the runs' steps differ.
+        """
+        runs = {n: p.run for n, p in self.profiles.items() if p.run is not None}
+        if not runs:
+            raise ValueError(f"{self.scenario.name}: no time series kept (a sweep's case)")
+        steps = {float(r.step) for r in runs.values()}
+        if len(steps) != 1:
+            raise ValueError(f"{self.scenario.name}: the runs have different steps {steps}")
+        length = max(r.t.size for r in runs.values())
+        mode = self.scenario.modemap.tune
+        tabs = {n: r.to_table(mode, length) for n, r in runs.items()}
+        first = next(iter(tabs.values()))
+        longest = max(runs.values(), key=lambda r: r.t.size)
+        cols = {"t_s": np.asarray(longest.t, dtype=float).copy(), "z_m": first["z_m"],
+                "f_Hz": first["f_Hz"]}
+        for n, tab in tabs.items():
+            for _, suffix in SIGNAL_COLUMNS:
+                cols[f"{n}_{suffix}"] = tab[suffix]
+        return cols
+
+    def to_table(self, what: str = "signals") -> dict[str, np.ndarray]:
+        """Return the results as columns of numpy arrays.
+
+        Parameters
+        ----------
+        what : {"signals", "metrics"}
+            ``signals``: the time series (:meth:`signals`, the columns of
+            ``<scenario>-signals.csv``); ``metrics``: one row per profile (the columns
+            of ``<scenario>.csv``, :meth:`rows`).
+
+        Returns
+        -------
+        dict of str to ndarray
+        """
+        if what == "signals":
+            return self.signals()
+        if what == "metrics":
+            return columns_of(self.rows())
+        raise ValueError(f"what must be 'signals' or 'metrics', got {what!r}")
+
+    def to_pandas(self, what: str = "signals") -> Any:
+        """:meth:`to_table` as a :class:`pandas.DataFrame` (pandas is optional).
+
+        Raises
+        ------
+        ImportError
+            When pandas is not installed.
+        """
+        return to_pandas(self.to_table(what))
+
+    def mat_variables(self) -> dict[str, Any]:
+        """Return the variables of ``<scenario>.mat``.
+
+        ``scenario`` (its name), ``metrics`` (a struct of the CSV's columns) and, when the
+        time series were kept, ``signals`` (a struct of the signals CSV's columns) and
+        ``signal_columns`` (their CSV names, in order).
+
+        Struct fields are the column names made valid MATLAB names
+        (:func:`harness.tables.mat_name`: ``DJL-optimal_x_m`` -> ``DJL_optimal_x_m``).
+        """
+        out: dict[str, Any] = {"scenario": self.scenario.name,
+                               "metrics": mat_variables(self.to_table("metrics"))}
+        if self.has_signals:
+            sig = self.signals()
+            out["signals"] = mat_variables(sig)
+            out["signal_columns"] = np.array(list(sig), dtype=object)
+        return out
+
     # -------------------------------------------------------------- plot
 
     def plot(self, title: str | None = None):
@@ -465,7 +558,7 @@ TABLE2_METRICS: dict[str, tuple[str, str]] = {
 
 
 @dataclass
-class SweepResult:
+class SweepResult(TableMixin):
     """A sweep over the paper's test set: every case's Table 1 and their Table 2.
 
     Identical moves are counted once in the statistics (:meth:`stats`,
@@ -650,6 +743,14 @@ class SweepResult:
     def to_csv(self, path: str | Path) -> Path:
         """Write :meth:`rows` as CSV; return the path."""
         return write_csv(path, self.rows())
+
+    def mat_variables(self) -> dict[str, Any]:
+        """Return the variables of ``<scenario>.mat``.
+
+        ``scenario`` (its name) and ``metrics`` (a struct of the CSV's columns, one element
+        per case and profile); a sweep keeps no time series.
+        """
+        return {"scenario": self.scenario.name, "metrics": mat_variables(self.to_table())}
 
     # -------------------------------------------------------------- plot
 

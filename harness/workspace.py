@@ -47,7 +47,13 @@ from tqdm import tqdm
 
 from .errors import BatchError, MoveError
 from .evaluation import run_case
-from .executors import describe_executor, executor_workers, make_executor, run_batches
+from .executors import (
+    LineProgress,
+    describe_executor,
+    executor_workers,
+    make_executor,
+    run_batches,
+)
 from .files import write_csv
 from .metrics import table2_stats
 from .results import TABLE2_PROFILES, SweepResult
@@ -202,8 +208,11 @@ def check_engine(engine: str, scenario: Scenario | None = None) -> None:
 
 
 def _progress_bar(total: int, enabled: bool, desc: str) -> Any:
-    if not enabled or not sys.stderr.isatty():
+    """Return a tqdm bar on a terminal, else a line on stderr every 10 s (None: disabled)."""
+    if not enabled:
         return None
+    if not sys.stderr.isatty():
+        return LineProgress(total, desc, "moves")
     return tqdm(total=total, desc=desc, unit="move", leave=False)
 
 

@@ -24,7 +24,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
         "harness", "harness._resources", "harness.errors", "harness.files",
         "harness.executors", "harness.plant", "harness.modemap", "harness.metrics",
         "harness.uncertainty", "harness._engine", "harness.compiled", "harness.scenarios",
-        "harness.shaper_designs",
+        "harness.shaper_designs", "harness.tables",
         "harness.fmu",
         "harness.fmu.*",
     ),
@@ -42,7 +42,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
 }
 """The layers, lowest first; a module may import only from its own layer or lower ones."""
 
-DEFERRABLE = ("matplotlib", "control", "scipy", "fmpy", "distributed", "ruckig",
+DEFERRABLE = ("matplotlib", "control", "scipy", "fmpy", "distributed", "ruckig", "pandas",
               "harness._engine")
 """What an import inside a function may load: heavy or optional dependencies only."""
 

@@ -42,11 +42,14 @@ def test_run_writes_table_csv_and_plot(tmp_path, capsys, fmu2):
     out = tmp_path / "out"
     rc = main(["simulate", str(scen), "--fmu", str(fmu2), "-o", str(out)])
     assert rc == 0
-    text = capsys.readouterr().out
+    captured = capsys.readouterr()
+    text = captured.out
     assert "Residual vibration [mm]" in text and "DJL compared with JL" in text
+    # a progress line on stderr as the scenario finishes
+    assert "simulate: cli-test (one move) done in " in captured.err
     assert sorted(p.name for p in out.iterdir()) == [
-        "cli-test-robustness.csv", "cli-test-robustness.png", "cli-test.csv", "cli-test.png",
-        "summary.txt"]
+        "cli-test-robustness.csv", "cli-test-robustness.png", "cli-test-signals.csv",
+        "cli-test.csv", "cli-test.png", "summary.txt"]
     rows = list(csv.DictReader((out / "cli-test.csv").open()))
     # the robustness curves pass through the nominal residual at e = 0 and their worst case
     # over +/-10 % is the CSV's
@@ -70,6 +73,7 @@ def test_fmi3_option(tmp_path, capsys, fmu3):
     rc = main(["simulate", str(scen), "--fmu", str(fmu3), "-o", str(tmp_path / "o"),
                "--no-plot", "-q"])
     assert rc == 0
+    assert capsys.readouterr().err == ""  # -q: no progress line
     assert "FMU " + str(fmu3) in (tmp_path / "o" / "summary.txt").read_text()
     assert not (tmp_path / "o" / "cli-test.png").exists()
 

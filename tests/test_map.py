@@ -446,8 +446,11 @@ def test_cli_run_writes_csv_heat_maps_and_summary(tmp_path, capsys, serial):
     rc = main(["map", str(scen), "--max-moves", "6", "--workers", "1", "--engine", ENGINE,
                "-o", str(out)])
     assert rc == 0
-    text = capsys.readouterr().out
+    captured = capsys.readouterr()
+    text = captured.out
     assert "Map map-test: 6 of 16 moves" in text and "wrote 6 files" in text
+    # progress on stderr (not a terminal: lines), the last one when all moves are done
+    assert captured.err.splitlines()[-1].startswith("map map-test: 6/6 moves done in ")
     assert sorted(p.name for p in out.iterdir()) == [
         "map-test-map-DJL-residual.png", "map-test-map-JL-residual.png",
         "map-test-map-djl-vs-jl-settling.png", "map-test-map.csv", "map-test-map.png",
@@ -468,7 +471,8 @@ def test_cli_run_writes_csv_heat_maps_and_summary(tmp_path, capsys, serial):
     assert main(["map", str(scen), "--max-moves", "2", "--workers", "1", "--engine", ENGINE,
                  "-o", str(out2), "--no-plot", "-q"]) == 0
     assert sorted(p.name for p in out2.iterdir()) == ["map-test-map.csv", "summary.txt"]
-    assert "Map map-test" not in capsys.readouterr().out
+    captured = capsys.readouterr()
+    assert "Map map-test" not in captured.out and captured.err == ""
 
 
 def test_duplicate_moves_are_marked_and_counted_once():

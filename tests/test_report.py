@@ -72,7 +72,11 @@ def test_failures_are_shown_not_hidden(tmp_path, monkeypatch):
     assert r2.verdict == "ERROR" and not r2.product_passed
     assert not summary.product_ok
     assert "boom in the claim" in text and "RuntimeError" in text
-    assert "<td class='FAILED'>FAILED</td>" in text
+    # the paper statement refuted, every product check passed: a finding, not a FAILED badge
+    assert r1.status == "REFUTED" and r2.status == "ERROR"
+    assert "<td class='REFUTED'>REFUTED</td>" in text
+    assert '<span class="badge REFUTED">paper statement refuted' in text
+    assert "<td class='FAILED'>FAILED</td>" not in text.split("<h2", 2)[-1]
     assert "it holds &lt;always&gt;" in text  # escaped
     assert "What failed" in text
 
@@ -81,8 +85,13 @@ def test_cli_report(tmp_path, fmu2, capsys):
     out = tmp_path / "cli.html"
     assert main(["report", "-o", str(out), "--fast", "--claims", "1", "--fmu", str(fmu2)]) == 0
     assert out.is_file()
-    captured = capsys.readouterr().out
-    assert "claim 1: PASSED" in captured and str(out) in captured
+    captured = capsys.readouterr()
+    # a progress line per claim on stderr, the result on stdout; -q: no progress line
+    assert "claim 1: PASSED" in captured.err and str(out) in captured.out
+    assert main(["report", "-o", str(out), "--fast", "--claims", "1", "--fmu", str(fmu2),
+                 "-q"]) == 0
+    captured = capsys.readouterr()
+    assert captured.err == "" and "1/1 claims passed" in captured.out
 
 
 def test_cli_exit_status(tmp_path, fmu2, monkeypatch, capsys):

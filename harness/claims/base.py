@@ -138,15 +138,25 @@ class Check:
         """Cells for a table: name, kind, expected, measured, rule/tol, unit, verdict."""
         tol = self.tol_text
         return [self.name, self.kind, _fmt(self.expected), _fmt(self.measured),
-                f"{self.rule}" + (f", tol = {tol}" if tol else ""), self.unit,
-                "PASSED" if self.passed else "FAILED"]
+                f"{self.rule}" + (f", tol = {tol}" if tol else ""), self.unit, self.status]
+
+    @property
+    def status(self) -> str:
+        """Return ``PASSED``, ``REFUTED`` or ``FAILED``.
+
+        ``REFUTED``: a paper statement that does not hold (a finding); ``FAILED``: a
+        product check that does not (a defect).
+        """
+        if self.passed:
+            return "PASSED"
+        return "REFUTED" if self.kind == "paper" else "FAILED"
 
     def describe(self) -> str:
         """One line: name, measured value, rule and tolerance, verdict."""
         tol = self.tol_text
         exp = "" if self.expected is None else f", paper side {_fmt(self.expected)}"
         return (f"{self.name}: measured {_fmt(self.measured)}{exp} ({self.rule}"
-                + (f", tol = {tol}" if tol else "") + f") {'PASSED' if self.passed else 'FAILED'}")
+                + (f", tol = {tol}" if tol else "") + f") {self.status}")
 
 
 @dataclass
@@ -222,6 +232,20 @@ class ClaimResult:
             return "ERROR"
         return "PASSED" if self.passed else "FAILED"
 
+    @property
+    def status(self) -> str:
+        """What the report's badge says.
+
+        ``PASSED`` (every check), ``REFUTED`` (every product check passed, a paper
+        statement does not hold: a finding about the paper), ``FAILED`` (a product
+        check failed: a defect) or ``ERROR`` (the computation raised).
+        """
+        if self.error is not None:
+            return "ERROR"
+        if self.passed:
+            return "PASSED"
+        return "REFUTED" if self.product_passed and self.checks else "FAILED"
+
     def failed_checks(self) -> list[Check]:
         """Return the checks that failed."""
         return [c for c in self.checks if not c.passed]
@@ -229,7 +253,7 @@ class ClaimResult:
     def summary(self) -> str:
         """One line: number, title, verdict, counts."""
         n_ok = sum(c.passed for c in self.checks)
-        return (f"claim {self.number}: {self.verdict:6s} {n_ok}/{len(self.checks)} checks  "
+        return (f"claim {self.number}: {self.status:7s} {n_ok}/{len(self.checks)} checks  "
                 f"{self.title}  ({self.elapsed:.1f} s)")
 
 

@@ -17,9 +17,11 @@ import math
 import multiprocessing
 import os
 import re
+import sys
 import tempfile
+import time
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
 
@@ -177,7 +179,25 @@ def add_quiet_option(p: argparse.ArgumentParser, plots: str | None = "the PNG fi
     if plots is not None:
         p.add_argument("--no-plot", action="store_true", help=f"do not write {plots}")
     p.add_argument("-q", "--quiet", action="store_true",
-                   help="no progress bar, do not print the tables")
+                   help="no progress lines (on stderr), do not print the tables")
+
+
+def progress_line(quiet: bool, text: str) -> None:
+    """Print one progress line on stderr at once, unless ``quiet``.
+
+    Every command reports its progress there (a line per scenario or claim as it
+    finishes), so that its tables on stdout can be redirected alone; ``-q`` silences it.
+    """
+    if not quiet:
+        print(text, file=sys.stderr, flush=True)
+
+
+def elapsed_text(seconds: float) -> str:
+    """``12.3 s`` or ``4 min 05 s``."""
+    if seconds < 60:
+        return f"{seconds:.1f} s"
+    m, s = divmod(int(round(seconds)), 60)
+    return f"{m} min {s:02d} s"
 
 
 def parse_tuning(text: str | None) -> list[str]:
@@ -451,33 +471,59 @@ def report_written(out: Path, written: Sequence[Path], summary: str, quiet: bool
 _TASKS: list[Callable[[], Any]] = []
 
 
-def _call(i: int) -> tuple[bool, Any]:
+def _call(i: int) -> tuple[bool, Any, float]:
+    t0 = time.perf_counter()
     try:
-        return True, _TASKS[i]()
+        return True, _TASKS[i](), time.perf_counter() - t0
     except Exception as e:  # noqa: BLE001 - sent back as text: exceptions may not pickle
-        return False, f"{type(e).__name__}: {e}" if str(e) else type(e).__name__
+        return (False, f"{type(e).__name__}: {e}" if str(e) else type(e).__name__,
+                time.perf_counter() - t0)
 
 
-def run_forked(tasks: Sequence[Callable[[], Any]], workers: int | None = None
+def run_forked(tasks: Sequence[Callable[[], Any]], workers: int | None = None,
+               on_done: Callable[[int, bool, float], None] | None = None
                ) -> list[tuple[bool, Any]]:
     """Run independent tasks on all cores (forked workers); return (ok, result or message).
 
     The tasks are closures inherited by the forked workers (nothing but the
     results is pickled); an exception comes back as ``(False, "Type: message")``.
     Where ``fork`` is not available, or for a single task, they run here.
+
+    Parameters
+    ----------
+    tasks : sequence of callable
+        Independent tasks without arguments.
+    workers : int, optional
+        Processes (default: one per core).
+    on_done : callable, optional
+        Called here as each task finishes, in the order they finish, with its index,
+        whether it succeeded and how long it ran (s): the progress lines.
+
+    Returns
+    -------
+    list of (bool, object)
+        In the order of ``tasks``.
     """
     tasks = list(tasks)
     n = min(len(tasks), workers or os.cpu_count() or 1)
-    if n <= 1 or "fork" not in multiprocessing.get_all_start_methods():
-        _TASKS[:] = tasks
-        try:
-            return [_call(i) for i in range(len(tasks))]
-        finally:
-            _TASKS.clear()
+    out: list[tuple[bool, Any]] = [(False, "not run")] * len(tasks)
+
+    def done(i: int, res: tuple[bool, Any, float]) -> None:
+        out[i] = res[:2]
+        if on_done is not None:
+            on_done(i, res[0], res[2])
+
     _TASKS[:] = tasks
     try:
+        if n <= 1 or "fork" not in multiprocessing.get_all_start_methods():
+            for i in range(len(tasks)):
+                done(i, _call(i))
+            return out
         with ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("fork")) as pool:
-            return list(pool.map(_call, range(len(tasks))))
+            futures = {pool.submit(_call, i): i for i in range(len(tasks))}
+            for fut in as_completed(futures):
+                done(futures[fut], fut.result())
+        return out
     finally:
         _TASKS.clear()
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from pathlib import Path
 
 from tqdm import tqdm
@@ -26,8 +27,10 @@ from ._common import (
     apply_uncertainty,
     check_rows_finite,
     check_stems,
+    elapsed_text,
     interruptible,
     load_scenarios,
+    progress_line,
     report_written,
     safe_stem,
     write_outputs,
@@ -212,15 +215,24 @@ def run(args: argparse.Namespace) -> int:
     results = []
     current = ""
     try:
-        for sc in tqdm(scenarios, disable=not show, desc="scenarios", leave=False):
+        for k, sc in enumerate(tqdm(scenarios, disable=not show, desc="scenarios",
+                                    leave=False)):
             current = sc.name
+            t0 = time.perf_counter()
             results.append(compare_scenario(sc, peers=peers, engine=args.engine,
                                             tuned_djl=not args.no_tuned_djl,
                                             bound=not args.no_bound and sc.z.moves))
+            progress_line(args.quiet, f"compare: {sc.name} done in "
+                                      f"{elapsed_text(time.perf_counter() - t0)} "
+                                      f"[{k + 1}/{len(scenarios)}]")
         table_t = None
         if args.timeopt:
             current = "time-optimal measurement"
+            t0 = time.perf_counter()
             table_t = measure(args.timeopt, fmu=scenarios[0].simulation.fmu, progress=show)
+            progress_line(args.quiet, f"compare: time-optimal measurement ({args.timeopt} "
+                                      f"moves per case) done in "
+                                      f"{elapsed_text(time.perf_counter() - t0)}")
     except (FMUError, ValueError, RuntimeError, OSError) as e:
         raise CommandError(1, f"run failed ({current}): {e}") from None
 

@@ -11,7 +11,14 @@ from ..fmu.build import BuildError, default_fmu
 from ..fmu.runner import check_fmu_binary, check_fmu_variables
 from ..peers.ruckig_ref import ruckig_available
 from ..report import PEERS_SKIPPED, print_failures, write_report
-from ._common import CommandError, add_out_option, check_out_dir, check_out_file, interruptible
+from ._common import (
+    CommandError,
+    add_out_option,
+    check_out_dir,
+    check_out_file,
+    interruptible,
+    progress_line,
+)
 
 
 def _claim_list(text: str) -> list[int]:
@@ -64,6 +71,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-peers", action="store_true",
                    help="leave out the section comparing AL/JL/DJL with the peer methods "
                         "(time-optimal JL, Sato, input shapers, damped jerk; needs ruckig)")
+    p.add_argument("-q", "--quiet", action="store_true",
+                   help="no progress lines (a line per claim as it finishes, on stderr)")
     p.set_defaults(func=interruptible(run))
 
 
@@ -111,8 +120,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         summary = write_report(out, fast=args.fast, fmi_version=args.fmi_version,
                                fmu=args.fmu, only=args.claims, embed=not args.figures_beside,
-                               progress=True, command=command,
-                               on_result=lambda r: print(r.summary(), flush=True),
+                               progress=not args.quiet, command=command,
+                               on_result=lambda r: progress_line(args.quiet, r.summary()),
                                peers=False if args.no_peers else None)
     except OSError as e:
         raise CommandError(1, f"cannot write {out}: {e} (the previous report, if any, is "

@@ -9,11 +9,12 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from ..files import OutputSet, save_figure, write_csv
+from ..files import OutputSet, save_figure, write_csv, write_mat
 from ..fmu.build import default_fmu
 from ..results import SweepResult, format_table2, table2_rows
 from ..scenario import DEFAULT_SCENARIOS, embedded_scenarios
 from ..sweeps import run_scenario
+from ..tables import rows_of
 from ._common import (
     CommandError,
     add_engine_option,
@@ -27,9 +28,11 @@ from ._common import (
     apply_tuning,
     apply_uncertainty,
     check_finite,
+    elapsed_text,
     interruptible,
     load_scenarios,
     parse_tuning,
+    progress_line,
     report_written,
     run_forked,
     write_outputs,
@@ -53,6 +56,12 @@ Table 1 of the paper) and sweep-X, sweep-Y (its test set, Table 2).
 Outputs, in --out (default ./djl-fmu-out/simulate), written only once every
 simulation has succeeded:
   <name>.csv      one row per profile (per case and profile for a sweep)
+  <name>-signals.csv
+                  single moves: the time series, one row per communication point:
+                  t_s, z_m, f_Hz (Z position and tuned-mode frequency of the first
+                  profile), then for each profile P: P_x_m, P_v_m_s, P_a_m_s2, P_j_m_s3
+                  (reference), P_eps_m (deflection of the load), P_z_m, P_f_Hz
+  <name>.mat      with --mat: the same for MATLAB (structs 'signals', 'metrics')
   <name>.png      reference x/v/a/j, deflection, f(t) and z(t) (a sweep: DJL vs JL per case)
   <name>-robustness.csv, <name>-robustness.png
                   single moves: each profile's residual when the whole mode map is off
@@ -101,6 +110,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="with --tuning: run each sweep's cases on N processes (default: every "
                         "core); without it the scenarios already share the cores")
     add_quiet_option(p)
+    p.add_argument("--mat", action="store_true",
+                   help="also write <name>.mat (MATLAB, scipy.io.savemat): the structs "
+                        "'signals' (single moves) and 'metrics' (the CSV's columns)")
     p.add_argument("--list", action="store_true",
                    help="list the embedded scenarios and exit")
     p.add_argument("--no-fmus", action="store_true",
@@ -142,7 +154,17 @@ def run(args: argparse.Namespace) -> int:
                  for sc, stem in zip(scenarios, stems, strict=True)]
         # tuned variants make sweeps long: then each sweep uses the cores itself, one
         # scenario after the other; otherwise the scenarios share the cores
-        outcomes = run_forked(tasks, workers=1 if variants else None)
+        finished = []
+
+        def on_done(i: int, ok: bool, seconds: float) -> None:
+            finished.append(i)
+            sc = scenarios[i]
+            what = f"{len(sc.cases())} cases" if sc.is_sweep else "one move"
+            progress_line(args.quiet, f"simulate: {sc.name} ({what}) "
+                                      f"{'done' if ok else 'FAILED'} in {elapsed_text(seconds)} "
+                                      f"[{len(finished)}/{len(scenarios)}]")
+
+        outcomes = run_forked(tasks, workers=1 if variants else None, on_done=on_done)
         results, figures = [], []
         for sc, (ok, value) in zip(scenarios, outcomes, strict=True):
             if not ok:
@@ -161,6 +183,10 @@ def run(args: argparse.Namespace) -> int:
         def write(o: OutputSet) -> None:
             for stem, r in zip(stems, results, strict=True):
                 r.to_csv(o.path(f"{stem}.csv"))
+                if getattr(r, "has_signals", False):
+                    write_csv(o.path(f"{stem}-signals.csv"), rows_of(r.signals()))
+                if args.mat:
+                    write_mat(o.path(f"{stem}.mat"), r.mat_variables())
                 rob = getattr(r, "robustness", None)
                 if rob is not None:
                     write_csv(o.path(f"{stem}-robustness.csv"), rob.rows())

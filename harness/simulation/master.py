@@ -217,6 +217,45 @@ class CoSimResult:
             eps += free_response(self.final_state[2 * i], self.final_state[2 * i + 1], m, tau)
         return self.t[-1] + tau, eps
 
+    def to_table(self, mode: int = 0, length: int | None = None) -> dict[str, np.ndarray]:
+        """Return the time series as columns.
+
+        ``t_s``, ``x_m``, ``v_m_s``, ``a_m_s2``, ``j_m_s3``, ``eps_m``, ``z_m``, ``f_Hz``
+        (see :data:`harness.tables.SIGNAL_COLUMNS`).
+
+        Parameters
+        ----------
+        mode : int
+            The mode whose frequency is ``f_Hz`` (the tuned one: ``ModeMap.tune``).
+        length : int, optional
+            Number of points (default: the record's).  A longer table continues the
+            record with both axes at rest: the last reference and Z values held, the
+            deflection the modes' free response (:meth:`extend`; NaN without a final
+            state).
+
+        Returns
+        -------
+        dict of str to ndarray
+        """
+        n = self.t.size
+        length = n if length is None else int(length)
+        if length < n:
+            raise ValueError(f"length {length} is shorter than the record ({n} points)")
+        cols = {"t_s": self.t, "x_m": self.x, "v_m_s": self.v, "a_m_s2": self.a,
+                "j_m_s3": self.j, "eps_m": self.eps, "z_m": self.z, "f_Hz": self.f[mode]}
+        if length == n:
+            return {k: np.asarray(v, dtype=float).copy() for k, v in cols.items()}
+        t_more, eps_more = self.extend((length - n) * self.step)
+        t_more, eps_more = t_more[:length - n], eps_more[:length - n]
+        if not self.final_modes:  # no final state kept: the deflection is unknown there
+            eps_more = np.full(length - n, math.nan)
+        out = {}
+        for k, v in cols.items():
+            more = (t_more if k == "t_s" else eps_more if k == "eps_m"
+                    else np.full(length - n, float(v[-1])))
+            out[k] = np.concatenate([np.asarray(v, dtype=float), more])
+        return out
+
     def plot(self, title: str | None = None) -> Any:
         """Plot the reference, the deflection and the mode frequency; return the figure."""
         return plot_runs({self.profile: self}, title=title or f"{self.profile} co-simulation")
