@@ -518,7 +518,8 @@ static void replanned(model_instance *m, double t, const djl_goal *g,
     if (info->clipped)
         model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
                   "t = %.17g s: %s: the jerk time of the stage that ends the current one was "
-                  "changed so that the velocity settles within v_max = %g m/s", t, why,
+                  "changed so that the velocity settles within v_max = %g m/s, and does not "
+                  "reverse", t, why,
                   d->p.v_max);
 }
 
