@@ -202,19 +202,26 @@ static void end_stage(const replan_state *r, transition *t, int64_t e, int32_t N
         t->s[0].N = (int32_t)N2;
         t->clipped = 1;
     }
-    if (!r->speeding_up && N > 0 && r->v != 0.0) {
-        /* a deceleration ends at rest at the latest, never by reversing (an ending ramp
-         * much longer than the stage's starting one, as N4 >> N3, would take the velocity
-         * through 0): the filter is shortened, each sample of it moving the settled
-         * velocity by level Te / 2 */
-        double sv = r->v > 0.0 ? 1.0 : -1.0, rev;
-        settle(r, t->s, 1, &v_s, &X_s);
-        rev = -sv * v_s;
-        if (rev > 1e-12 * r->v_max) {
-            double cut = djl_ceil(rev / (djl_fabs(r->level) * r->Te * 0.5));
-            t->s[0].N = (int32_t)dmax2((double)t->s[0].N - cut, dmax2(Nmin, 1.0));
-            t->clipped = 1;
-        }
+}
+
+/* A stop: a deceleration in progress ends at rest at the latest, never by reversing (an
+ * ending ramp much longer than the stage's starting one, as N4 >> N3, would take the
+ * velocity through 0 and the axis back): the filter of t's ending step is shortened,
+ * each sample of it moving the settled velocity by level Te / 2, not below the ramp
+ * that started the stage.  (A new move needs no such care: it stops and comes back, or
+ * the jerk times are declined, no_stop_first.) */
+static void no_reversal(const replan_state *r, transition *t)
+{
+    double sv, v_s, X_s, rev;
+    if (t->n != 1 || r->speeding_up || r->v == 0.0 || t->s[0].N <= 0) return;
+    sv = r->v > 0.0 ? 1.0 : -1.0;
+    settle(r, t->s, 1, &v_s, &X_s);
+    rev = -sv * v_s;
+    if (rev > 1e-12 * r->v_max) {
+        double cut = djl_ceil(rev / (djl_fabs(r->level) * r->Te * 0.5));
+        double Nmin = (double)(stage_start_end(r) - t->s[0].tau);
+        t->s[0].N = (int32_t)dmax2((double)t->s[0].N - cut, dmax2(Nmin, 1.0));
+        t->clipped = 1;
     }
 }
 
@@ -300,6 +307,7 @@ static void stop_transition(const replan_state *r, transition *t, const int32_t 
     int32_t Nend = ending_filter(r, N);
     transition on;
     end_stage(r, t, b, Nend);
+    no_reversal(r, t);
     on.n = 0;
     if (t->n == 1) {
         /* going on: e and the split f; the ending filter is end_stage's, which
