@@ -362,7 +362,8 @@ typedef struct {
     int64_t end_at;     /* sample of the step ending the stage in progress (-1: none) */
     int32_t how;        /* 1 new move after the stage in progress ends; 2 stop and then move;
                            3 stop */
-    int32_t clipped;    /* the ending stage's jerk time was changed to stay within v_max */
+    int32_t clipped;    /* the ending stage's jerk time was changed: 1 to stay within v_max,
+                           2 (a stop) so that the axis rests without reversing */
     int32_t lengthened; /* ... lengthened, so as not to end before the ramp that started the
                            stage (still running at b) */
     double v_settled;   /* m/s, velocity once the ramps running have ended */

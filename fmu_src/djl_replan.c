@@ -221,7 +221,7 @@ static void no_reversal(const replan_state *r, transition *t)
         double cut = djl_ceil(rev / (djl_fabs(r->level) * r->Te * 0.5));
         double Nmin = (double)(stage_start_end(r) - t->s[0].tau);
         t->s[0].N = (int32_t)dmax2((double)t->s[0].N - cut, dmax2(Nmin, 1.0));
-        t->clipped = 1;
+        t->clipped = 2;
     }
 }
 

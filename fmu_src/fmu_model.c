@@ -515,12 +515,15 @@ static void replanned(model_instance *m, double t, const djl_goal *g,
               replan_how[info->how >= 1 && info->how <= 3 ? info->how : 0],
               (long long)info->end_at, info->v_settled, (int)g->N[0], (int)g->N[1],
               (int)g->N[2], (int)g->N[3], djl_motion_time(&d->plan), (long long)info->origin);
-    if (info->clipped)
+    if (info->clipped == 1)
         model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
                   "t = %.17g s: %s: the jerk time of the stage that ends the current one was "
-                  "changed so that the velocity settles within v_max = %g m/s, and does not "
-                  "reverse", t, why,
+                  "changed so that the velocity settles within v_max = %g m/s", t, why,
                   d->p.v_max);
+    else if (info->clipped == 2)
+        model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
+                  "t = %.17g s: %s: the jerk time of the stage that ends the current one was "
+                  "shortened so that the axis comes to rest without reversing", t, why);
 }
 
 /* With a shaper, before the plan is replaced by one starting at its sample floor(u): the
@@ -592,11 +595,11 @@ static model_status command_from_f_mode(model_instance *m, double t, double u, d
         return model_refuse(m, "DoStep at t = %.17g s: %s: %s: %s (nothing was done)", t, why,
                             djl_status_name(st), err.message);
     for (i = 0; i < 4; i++) same &= g->N[i] == d->plan.N[i] || d->plan.N[i] <= 0;
-    model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
-              "t = %.17g s: %s: f_mode = %g Hz: the stages keep their planned jerk times "
-              "%d/%d/%d/%d samples (%s)", t, why, d->f_mode, (int)d->plan.N[0],
-              (int)d->plan.N[1], (int)d->plan.N[2], (int)d->plan.N[3], err.message);
     if (!same) {
+        model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
+                  "t = %.17g s: %s: f_mode = %g Hz: the stages keep their planned jerk times "
+                  "%d/%d/%d/%d samples (%s)", t, why, d->f_mode, (int)d->plan.N[0],
+                  (int)d->plan.N[1], (int)d->plan.N[2], (int)d->plan.N[3], err.message);
         for (i = 0; i < 4; i++)
             if (d->plan.N[i] > 0) g->N[i] = d->plan.N[i];
         st = replan_try(m, u, g, &info, &err);

@@ -556,7 +556,7 @@ def n_min_in_force(rec: Record) -> int:
     return min(n_of_f(f, ax.Te) for f in set(rec.f_values()))
 
 
-SHORTENED = "was changed so that the velocity settles"
+SHORTENED = "the jerk time of the stage that ends the current one was"
 """The FMU's warning for a stage's ending ramp shortened (docs/generator.md, exception 2b)."""
 
 
