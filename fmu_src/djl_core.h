@@ -351,7 +351,8 @@ typedef struct {
                               the landing is re-timed, a cruise is not raised) */
     int32_t no_stop_first; /* refuse (DJL_E_INFEASIBLE, *out untouched) a replan that would
                               stop and then come back (new jerk times that no longer land
-                              from where the axis is: the caller keeps its plan) */
+                              from where the axis is: the caller keeps its plan), or a stop
+                              that would rest past where the plan in progress rests */
 } djl_goal;
 
 /* What a replan decided (for logs and diagnostics). */
@@ -361,10 +362,14 @@ typedef struct {
     int64_t end_at;     /* sample of the step ending the stage in progress (-1: none) */
     int32_t how;        /* 1 new move after the stage in progress ends; 2 stop and then move;
                            3 stop */
-    int32_t clipped;    /* the ending stage's jerk time was changed to stay within v_max */
+    int32_t clipped;    /* the ending stage's jerk time was changed: 1 to stay within v_max,
+                           2 (a stop) so that the axis rests without reversing */
     int32_t lengthened; /* ... lengthened, so as not to end before the ramp that started the
                            stage (still running at b) */
     double v_settled;   /* m/s, velocity once the ramps running have ended */
+    int32_t kept;       /* a stop that would have rested past where *old rests (the target
+                           of the move it stops): *old is kept (copied to *out), origin 0,
+                           how 0 (with no_stop_first: DJL_E_INFEASIBLE instead) */
 } djl_replan_info;
 
 /* Replan the motion of *old at the (possibly fractional) time u, in samples
@@ -375,8 +380,9 @@ typedef struct {
  * the room to stop allow), and the rest is a new move planned from the state
  * reached, ending exactly at the target at rest (or at rest for a stop).  The
  * new plan, written to *out (which may be old), starts at sample origin =
- * floor(u) of the old one; scratch is work space.  No allocation; bounded
- * work. */
+ * floor(u) of the old one; scratch is work space.  A stop never rests past
+ * where *old rests when that lies ahead (the target of the move it stops):
+ * such a stop keeps *old instead (info->kept).  No allocation; bounded work. */
 djl_status djl_replan(const djl_plan *old, double u, const djl_goal *goal, djl_plan *out,
                       djl_plan *scratch, djl_replan_info *info, djl_error *err);
 

@@ -204,6 +204,27 @@ static void end_stage(const replan_state *r, transition *t, int64_t e, int32_t N
     }
 }
 
+/* A stop: a deceleration in progress ends at rest at the latest, never by reversing (an
+ * ending ramp much longer than the stage's starting one, as N4 >> N3, would take the
+ * velocity through 0 and the axis back): the filter of t's ending step is shortened,
+ * each sample of it moving the settled velocity by level Te / 2, not below the ramp
+ * that started the stage.  (A new move needs no such care: it stops and comes back, or
+ * the jerk times are declined, no_stop_first.) */
+static void no_reversal(const replan_state *r, transition *t)
+{
+    double sv, v_s, X_s, rev;
+    if (t->n != 1 || r->speeding_up || r->v == 0.0 || t->s[0].N <= 0) return;
+    sv = r->v > 0.0 ? 1.0 : -1.0;
+    settle(r, t->s, 1, &v_s, &X_s);
+    rev = -sv * v_s;
+    if (rev > 1e-12 * r->v_max) {
+        double cut = djl_ceil(rev / (djl_fabs(r->level) * r->Te * 0.5));
+        double Nmin = (double)(stage_start_end(r) - t->s[0].tau);
+        t->s[0].N = (int32_t)dmax2((double)t->s[0].N - cut, dmax2(Nmin, 1.0));
+        t->clipped = 2;
+    }
+}
+
 /* Filter of the step that ends the stage in progress. */
 static int32_t ending_filter(const replan_state *r, const int32_t N[4])
 {
@@ -286,6 +307,7 @@ static void stop_transition(const replan_state *r, transition *t, const int32_t 
     int32_t Nend = ending_filter(r, N);
     transition on;
     end_stage(r, t, b, Nend);
+    no_reversal(r, t);
     on.n = 0;
     if (t->n == 1) {
         /* going on: e and the split f; the ending filter is end_stage's, which
@@ -504,6 +526,39 @@ static djl_status compose(const djl_plan *old, const replan_state *r, const tran
     return DJL_OK;
 }
 
+/* Does the stop of t rest past where *old rests?  In the direction the axis moves at o
+ * (from rest: towards that rest), when *old goes there without turning back: a stop
+ * never rests past the target of the move it stops (nor, for a stop replanned, past the
+ * rest it was planned to).  A plan that ends moving, or that comes to rest or turns back
+ * before its end (it stops first and comes back: its target lies within its stopping
+ * distance, and so within the stop's), bounds nothing. */
+static int stop_passes(const djl_plan *old, const replan_state *r, const transition *t,
+                       double *rest, double *bound)
+{
+    djl_sample s;
+    int32_t cur = 0;
+    double st[4], xe, sg, tol;
+    int64_t T;
+    int i;
+    if (old->v_target != 0.0) return 0;
+    djl_eval(old, (double)old->k_end, &cur, &s);
+    xe = s.x - r->x; /* where the plan in progress rests, relative to o */
+    sg = r->v > 0.0 ? 1.0 : r->v < 0.0 ? -1.0 : xe > 0.0 ? 1.0 : xe < 0.0 ? -1.0 : 0.0;
+    if (sg == 0.0 || sg * xe < 0.0) return 0;
+    for (i = 0; i < old->n_pieces; i++) /* at rest or turning back before the end? */
+        if (old->piece[i].k > r->o && old->piece[i].k < old->k_end &&
+            sg * old->piece[i].v <= 1e-12 * r->v_max)
+            return 0;
+    T = imax2(ramps_end(r, t->s, t->n), r->b - r->o);
+    (void)walk(r, t->s, t->n, T, NULL, st);
+    /* rounding: a trillionth of the distance to that rest and of a sample at v_max, and
+     * the resolution of the positions */
+    tol = 1e-12 * (djl_fabs(xe) + r->v_max * r->Te) + 4e-16 * (djl_fabs(s.x) + djl_fabs(r->x));
+    *rest = r->x + st[0];
+    *bound = s.x;
+    return sg * (st[0] - xe) > tol;
+}
+
 djl_status djl_replan(const djl_plan *old, double u, const djl_goal *g, djl_plan *out,
                       djl_plan *scratch, djl_replan_info *info, djl_error *err)
 {
@@ -538,8 +593,26 @@ djl_status djl_replan(const djl_plan *old, double u, const djl_goal *g, djl_plan
     Nend = ending_filter(&r, g->N);
 
     if (g->kind == DJL_GOAL_STOP) {
+        double rest, bound;
         stop_transition(&r, &t, g->N);
         how = 3;
+        if (stop_passes(old, &r, &t, &rest, &bound)) {
+            if (g->no_stop_first)
+                return set_error(err, DJL_E_INFEASIBLE, "N", (double)g->N[2],
+                                 "with the jerk times %d/%d/%d/%d samples the stop would rest "
+                                 "at %.17g m, past %.17g m where the motion in progress rests",
+                                 (int)g->N[0], (int)g->N[1], (int)g->N[2], (int)g->N[3], rest,
+                                 bound);
+            /* the motion in progress is kept: it rests no further */
+            if (out != old) memcpy(out, old, sizeof *out);
+            inf.origin = 0;
+            inf.how = 0;
+            inf.end_at = -1;
+            inf.kept = 1;
+            inf.v_settled = 0.0;
+            if (info) *info = inf;
+            return DJL_OK;
+        }
     } else {
         Dt = g->target - r.x;
         if (r.level != 0.0 && r.speeding_up)

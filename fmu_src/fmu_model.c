@@ -515,11 +515,15 @@ static void replanned(model_instance *m, double t, const djl_goal *g,
               replan_how[info->how >= 1 && info->how <= 3 ? info->how : 0],
               (long long)info->end_at, info->v_settled, (int)g->N[0], (int)g->N[1],
               (int)g->N[2], (int)g->N[3], djl_motion_time(&d->plan), (long long)info->origin);
-    if (info->clipped)
+    if (info->clipped == 1)
         model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
                   "t = %.17g s: %s: the jerk time of the stage that ends the current one was "
                   "changed so that the velocity settles within v_max = %g m/s", t, why,
                   d->p.v_max);
+    else if (info->clipped == 2)
+        model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
+                  "t = %.17g s: %s: the jerk time of the stage that ends the current one was "
+                  "shortened so that the axis comes to rest without reversing", t, why);
 }
 
 /* With a shaper, before the plan is replaced by one starting at its sample floor(u): the
@@ -529,23 +533,87 @@ static int64_t keep_past(model_data *d, double u)
     return djl_shaper_keep_past(&d->mem, &d->plan, d->offset, djl_floor(u));
 }
 
-/* The plan replaced by djl_replan at u (samples of the current plan), towards g. */
+/* djl_replan of the current plan at u (its samples), towards g, in place; with a
+ * shaper the memory keeps the past the delayed copies read (undone if nothing is
+ * replaced: a failure, or a stop that keeps the move in progress). */
+static djl_status replan_try(model_instance *m, double u, const djl_goal *g,
+                             djl_replan_info *info, djl_error *err)
+{
+    model_data *d = &m->d;
+    int64_t kept = d->shaper.n > 0 ? keep_past(d, u) : 0;
+    djl_status st = djl_replan(&d->plan, u, g, &d->plan, &m->w.scratch, info, err);
+    if ((st != DJL_OK || info->kept) && d->shaper.n > 0) djl_shaper_undo(&d->mem, kept);
+    return st;
+}
+
+/* The plan replaced by djl_replan at u (samples of the current plan), towards g; *origin:
+ * the sample of the current plan the new one starts at (0: a stop kept the move). */
 static model_status replan_at(model_instance *m, double t, double u, const djl_goal *g,
-                              const char *why)
+                              const char *why, int64_t *origin)
+{
+    model_data *d = &m->d;
+    djl_replan_info info;
+    djl_error err;
+    djl_status st = replan_try(m, u, g, &info, &err);
+    if (st != DJL_OK)
+        return model_refuse(m, "DoStep at t = %.17g s: %s: %s: %s (nothing was done)", t, why,
+                            djl_status_name(st), err.message);
+    *origin = info.origin;
+    if (info.kept) {
+        model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
+                  "t = %.17g s: stop: with the jerk times %d/%d/%d/%d samples it would rest "
+                  "past where the move in progress rests (at %.17g s): the move is kept", t,
+                  (int)g->N[0], (int)g->N[1], (int)g->N[2], (int)g->N[3],
+                  d->start_time + (d->offset + (double)d->plan.k_end) * d->p.Te);
+        return ST_OK;
+    }
+    replanned(m, t, g, &info, why);
+    return ST_OK;
+}
+
+/* A command with jerk times from f_mode (jerk_source 2, 3): f_mode's jerk times g->N if
+ * the axis then neither stops and comes back nor (a stop) rests past the move's target;
+ * else the jerk times the plan in progress has, on the same terms; else (the target
+ * needs a stop first whatever the jerk times) those of the plan in progress, without
+ * the terms.  Landing wins over the rule (docs/generator.md, "Commanded moves"). */
+static model_status command_from_f_mode(model_instance *m, double t, double u, djl_goal *g,
+                                        const char *why, int64_t *origin)
 {
     model_data *d = &m->d;
     djl_replan_info info;
     djl_error err;
     djl_status st;
-    int64_t kept = d->shaper.n > 0 ? keep_past(d, u) : 0;
-    st = djl_replan(&d->plan, u, g, &d->plan, &m->w.scratch, &info, &err);
-    if (st != DJL_OK) {
-        if (d->shaper.n > 0) djl_shaper_undo(&d->mem, kept);
+    int i, same = 1;
+    g->no_stop_first = 1;
+    st = replan_try(m, u, g, &info, &err);
+    if (st == DJL_OK) {
+        *origin = info.origin;
+        replanned(m, t, g, &info, why);
+        return ST_OK;
+    }
+    if (st != DJL_E_INFEASIBLE)
         return model_refuse(m, "DoStep at t = %.17g s: %s: %s: %s (nothing was done)", t, why,
                             djl_status_name(st), err.message);
+    for (i = 0; i < 4; i++) same &= g->N[i] == d->plan.N[i] || d->plan.N[i] <= 0;
+    if (!same) {
+        model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
+                  "t = %.17g s: %s: f_mode = %g Hz: the stages keep their planned jerk times "
+                  "%d/%d/%d/%d samples (%s)", t, why, d->f_mode, (int)d->plan.N[0],
+                  (int)d->plan.N[1], (int)d->plan.N[2], (int)d->plan.N[3], err.message);
+        for (i = 0; i < 4; i++)
+            if (d->plan.N[i] > 0) g->N[i] = d->plan.N[i];
+        st = replan_try(m, u, g, &info, &err);
+        if (st == DJL_OK) {
+            *origin = info.origin;
+            replanned(m, t, g, &info, why);
+            return ST_OK;
+        }
+        if (st != DJL_E_INFEASIBLE)
+            return model_refuse(m, "DoStep at t = %.17g s: %s: %s: %s (nothing was done)", t,
+                                why, djl_status_name(st), err.message);
     }
-    replanned(m, t, g, &info, why);
-    return ST_OK;
+    g->no_stop_first = 0;
+    return replan_at(m, t, u, g, why, origin);
 }
 
 /* A stop while the move in progress only slows down to rest (no step ahead but
@@ -639,13 +707,18 @@ static model_status commands(model_instance *m, double t, double u0, double du)
         d->goal_target = d->target;
     } else if (stop_edge || exec_edge) {
         model_status st;
-        g.kind = stop_edge ? DJL_GOAL_STOP : DJL_GOAL_TARGET;
-        g.target = d->target;
-        st = replan_at(m, t, u0, &g, stop_edge ? "stop" : "execute");
+        int64_t origin = 0;
+        djl_goal gc = g;
+        gc.kind = stop_edge ? DJL_GOAL_STOP : DJL_GOAL_TARGET;
+        gc.target = d->target;
+        if (d->jerk_source >= JERK_SOURCE_F_MODE)
+            st = command_from_f_mode(m, t, u0, &gc, stop_edge ? "stop" : "execute", &origin);
+        else
+            st = replan_at(m, t, u0, &gc, stop_edge ? "stop" : "execute", &origin);
         if (st != ST_OK) return st;
-        d->goal = g.kind;
+        d->goal = gc.kind;
         d->goal_target = d->target;
-        u0 -= djl_floor(u0);
+        u0 -= (double)origin;
         u_end = u0 + du;
     }
     d->stop_seen = d->stop;

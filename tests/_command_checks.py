@@ -4,14 +4,15 @@ The :class:`Driver` sets the inputs ``target``, ``execute``, ``stop`` and ``f_mo
 ``doStep`` calls of one fmpy slave (FMI 2 or 3) and records every output at every
 communication point, together with the inputs in force for each step and the command edges
 the FMU must have seen.  The checks below work on that record alone: nothing here calls the
-planner or re-derives a plan.  What they use is the interface contract (``iface.md``) and
-elementary kinematics:
+planner or re-derives a plan.  What they use is the contract of docs/generator.md
+("Commanded moves") and elementary kinematics:
 
 * a sampled reference is a piecewise cubic: over each generator sample interval the jerk is
   constant, so x, v, a at one communication point follow from those at the previous one;
 * the limits v_max, max(a_max, d_max) and level / (jerk time) bound v, a and j;
-* a command takes effect at the first generator sample at or after the communication point
-  of the step that saw its edge; stop wins over execute at the same step;
+* a command takes effect at the first generator sample strictly after the communication
+  point t of the step that saw its edge (docs/generator.md, "When a command acts"); stop
+  wins over execute at the same step;
 * after the last command the axis rests at the last target (or wherever a stop left it).
 """
 
@@ -30,7 +31,7 @@ from harness.fmu.runner import FMUError, GeneratorFMU
 INPUTS = ("target", "execute", "stop", "f_mode")
 START: dict[str, float | bool] = {"target": 0.0, "execute": False, "stop": False,
                                   "f_mode": 10.0}
-"""Start values of the inputs (iface.md)."""
+"""Start values of the inputs (docs/generator.md, "Commanded moves")."""
 
 REALS = ("x", "v", "a", "j")
 FLAGS = ("done", "busy")
@@ -40,13 +41,6 @@ CALCULATED = ("motion_time", "N_F1", "N_F2", "N_F3", "N_F4", "v_reached", "a_rea
 GRID_TOL = 1e-9
 """A communication point within this many samples of a generator sample is on it."""
 
-KNOWN_COMMAND_AT_NEXT_SAMPLE = True
-"""C side: an input seen by the step from t acts from the first sample strictly after t
-(iface.md: at or after t); the two differ when t is on a sample, as with steps of Te: an
-execute there moves the axis one sample later, and f_mode there sets the jerk time of a
-stage starting at t + Te, not t.  test_a_command_acts_from_the_first_sample_at_or_after_its
-_step holds the interface's rule (xfail); while True the other checks follow the FMU's, so
-that they test everything else.  Set False once the C side (or the interface) settles it."""
 
 
 # ------------------------------------------------------------------------- the axis
@@ -112,7 +106,7 @@ class Axis:
 
 
 def n_of_f(f: float, Te: float) -> int:
-    """Jerk time in samples for mode frequency ``f`` (iface.md: round(1/(f Te)))."""
+    """Jerk time in samples for mode frequency ``f`` (docs/generator.md: round(1/(f Te)))."""
     q = 1.0 / (f * Te)
     n = math.floor(q + 0.5)
     assert abs(q - n) < 0.499, f"f_mode {f} is too close to a rounding tie ({q} samples)"
@@ -191,9 +185,10 @@ class Record:
         return self.start_time + kk * Te
 
     def effect_sample(self, t: float) -> float:
-        """The sample from which an input seen by the step from ``t`` acts."""
+        """The sample from which an input seen by the step from ``t`` acts: the first one
+        strictly after t (docs/generator.md, "When a command acts")."""
         s = self.sample_at_or_after(t)
-        if KNOWN_COMMAND_AT_NEXT_SAMPLE and self.on_grid(t):
+        if self.on_grid(t):
             s += self.axis.Te
         return s
 
@@ -463,25 +458,6 @@ def check_sane(rec: Record) -> None:
     assert bad.size == 0, f"busy == done at t = {r['t'][bad[0]]} (point {bad[0]})"
 
 
-def _stale_points(rec: Record) -> set[int]:
-    """Points whose j (and AL's a) may predate an input set before the step that starts there.
-
-    The outputs at a point come from the step that ends there; a command (or, with
-    jerk_source = 2, an f_mode) set before the next step can change the sample interval that
-    starts at that point.  Only inputs that can do so count: edges, and f_mode changes with
-    jerk_source = 2 (with jerk_source = 1 f_mode is unused; a target without an edge is inert).
-    """
-    out: set[int] = set()
-    if KNOWN_COMMAND_AT_NEXT_SAMPLE:
-        return out   # the FMU's rule: nothing set before a step changes the interval at t
-    for i, s in enumerate(rec.steps):
-        relevant = s.exec_edge or s.stop_edge or (rec.axis.jerk_source >= 2
-                                                  and "f_mode" in s.changed)
-        if relevant and rec.on_grid(s.t):
-            out.add(i)
-    return out
-
-
 def profile_samples(rec: Record) -> list[float]:
     """Profile time of each point, in samples since the start time, as the FMU counts it:
     the steps' h / Te added up, the phase snapped to a whole sample within 1e-9 (the
@@ -506,15 +482,14 @@ def check_continuity(rec: Record, tol: Tolerances | None = None) -> list[float]:
 
     Over each generator sample interval the jerk is constant (the reported j of any point
     inside it); for AL the acceleration is constant (the reported a).  x, v (and a, for JL and
-    DJL) at each point must follow from those at the previous one.  Steps h <= Te.  Where a
-    step starts on a sample and an input changed before it, the reported j of its first point
-    may predate the change: the interval's jerk (AL: acceleration) is then inferred from the
-    next point's a (v), and x, v must still agree with it.
+    DJL) at each point must follow from those at the previous one.  Steps h <= Te.  An input
+    set before a step acts from the first sample strictly after the step's start
+    (docs/generator.md, "When a command acts"), so the reported j of every point is the
+    jerk of the interval that starts there, whatever was set after it.
     """
     ax = rec.axis
     tol = tol or Tolerances.of(rec)
     Te = ax.Te
-    stale = _stale_points(rec)
     al = ax.profile == 1
     jerks: list[float] = []
     t, x, v, a, j = rec.t, rec.x, rec.v, rec.a, rec.j
@@ -535,15 +510,8 @@ def check_continuity(rec: Record, tol: Tolerances | None = None) -> list[float]:
             # one sample interval: [t[i], t[i+1]]
             tau = (ue - ui) * Te
             if end_on_grid:
-                # the interval holding t[i] ends at t[i+1]: its jerk is j[i] (stale: inferred)
-                if i in stale:
-                    if al:
-                        ai = (v[i + 1] - v[i]) / tau
-                        as_, ji = ai, 0.0
-                    else:
-                        ji = (a[i + 1] - a[i]) / tau
-                else:
-                    ji = j[i]
+                # the interval holding t[i] ends at t[i+1]: its jerk is j[i]
+                ji = j[i]
             else:
                 ji = j[i + 1]     # same interval as t[i + 1], reported after the step
                 if al:
@@ -572,8 +540,10 @@ def check_continuity(rec: Record, tol: Tolerances | None = None) -> list[float]:
 
 def f_index(k: int) -> int:
     """Index of the step whose f_mode sets the jerk time of a stage starting at sample k
-    (steps of Te): the step from k (iface.md), or the one ending there (the FMU)."""
-    return k - 1 if KNOWN_COMMAND_AT_NEXT_SAMPLE else k
+    (steps of Te): the one ending there, from k - 1 (docs/generator.md, "When a command
+    acts": a stage that starts at sample tau takes the f_mode read at the DoStep at
+    tau - Te)."""
+    return k - 1
 
 
 def n_min_in_force(rec: Record) -> int:
@@ -586,12 +556,18 @@ def n_min_in_force(rec: Record) -> int:
     return min(n_of_f(f, ax.Te) for f in set(rec.f_values()))
 
 
-def check_jerk_bound(rec: Record, jerks: Iterable[float]) -> None:
-    """|j| <= (largest level) / (shortest jerk time in force), reported and inferred jerks."""
+SHORTENED = "the jerk time of the stage that ends the current one was"
+"""The FMU's warning for a stage's ending ramp shortened (docs/generator.md, exception 2b)."""
+
+
+def check_jerk_bound(rec: Record, jerks: Iterable[float], *, shortened: bool = False) -> None:
+    """|j| <= (largest level) / (shortest jerk time in force), reported and inferred jerks;
+    with an ending ramp shortened (logged, ``shortened``) that ramp's own length, one sample
+    at least."""
     ax = rec.axis
     if ax.profile == 1:
         return
-    n = n_min_in_force(rec)
+    n = 1 if shortened else n_min_in_force(rec)
     level = ax.level if ax.short_stage == 1 else ax.a_max + ax.d_max
     bound = level / (n * ax.Te) * (1 + 1e-9)
     jm = max((abs(q) for q in [*jerks, *rec.j]), default=0.0)
@@ -802,9 +778,7 @@ def check_rest_to_rest(rec: Record, *, stage_lengths: bool = True) -> int:
         assert np.all(np.diff(x) >= -tol.x), f"x goes back; {ctx}"
         if ax.profile == 1 or ax.short_stage != 1:
             continue   # (the overlap rule lets ramps of two stages overlap)
-        # the j and stage of the point at the command's sample may predate it (iface.md's
-        # rule; not the FMU's): from the next point on, then
-        q0 = m.p0 if KNOWN_COMMAND_AT_NEXT_SAMPLE else m.p0 + 1
+        q0 = m.p0
         st = np.array(rec.stage[q0:m.p_end + 1])
         j = sg * np.array(rec.j[q0:m.p_end + 1])
         labels = [int(q) for q in st if q]
@@ -919,42 +893,54 @@ def _uniq(seg: np.ndarray) -> str:
     return ", ".join(f"{q:.6g} x{int(c)}" for q, c in out)
 
 
-def check_stop_in_deceleration(rec: Record) -> int:
-    """A stop while a move from rest is slowing down ends no further than its target.
+@dataclass(frozen=True)
+class StopCount:
+    """Stops :func:`check_stops` checked, and those it could not check."""
 
-    Applies with fixed jerk times (jerk_source = 1, or f_mode never changed): the stop brakes
-    with d_max and the same stages' jerk times as the move it interrupts, so it can only come
-    to rest earlier.  Returns the number of stops checked.
+    checked: int
+    unchecked: int
+    """Stops of a move from rest that another command replaced before the axis rested."""
+
+
+def check_stops(rec: Record) -> StopCount:
+    """A stop never brings the axis to rest beyond the target of the move it stops.
+
+    docs/generator.md, "Commanded moves": in the direction of the move, the rest lies between
+    the position at the stop and the move's target, and the axis does not back up on the way
+    (a stop that would rest past the target keeps the move instead).  Checked for every stop
+    that follows an execute from rest (a move that reaches its target without turning back),
+    whatever the phase of the move, the jerk times or f_mode: the position at the stop is
+    that of the last point at or before the sample where it acts, the rest that of the first
+    point from there with ``done``.  A stop replaced by another command before that point
+    cannot be checked: it is counted in ``unchecked``.
     """
-    ax = rec.axis
-    if ax.jerk_source >= 2 and len(set(rec.f_values())) > 1:
-        return 0
     cmds = rec.commands()
     moves = {m.cmd.step: m for m in _moves_from_rest_any_end(rec)}
-    n = 0
+    tv = Tolerances.of(rec).v
+    checked = unchecked = 0
     for i, c in enumerate(cmds):
         if c.kind != "stop" or i == 0 or cmds[i - 1].step not in moves:
             continue
         mv = moves[cmds[i - 1].step]
         ps = _point_at_or_before(rec, c.sample)
-        if abs(rec.t[ps] - c.sample) > rec.ttol:
-            continue
-        sg = mv.direction
-        if not (sg * rec.a[ps] < 0 and sg * rec.v[ps] > 0):
-            continue
         nxt = cmds[i + 1].sample if i + 1 < len(cmds) else math.inf
-        p1 = _first_point_after(rec, c.sample)
-        pe = next((p for p in range(p1, len(rec.t)) if rec.done[p]), None)
+        pe = next((p for p in range(max(ps, c.step + 1), len(rec.t)) if rec.done[p]), None)
         if pe is None or rec.t[pe] > nxt - rec.ttol:
+            unchecked += 1
             continue
-        tol = 1e-9 * _move_scale(rec, mv.p0, pe, mv.cmd.target) + 4e-16 * abs(mv.cmd.target)
-        over = sg * (rec.x[pe] - mv.cmd.target)
-        assert over <= tol, (
-            f"a stop at t = {c.sample!r} (v = {rec.v[ps]!r}, a = {rec.a[ps]!r}, decelerating) "
-            f"came to rest at {rec.x[pe]!r}, {over:.3e} past the move's target "
-            f"{mv.cmd.target!r}\n" + rec.describe())
-        n += 1
-    return n
+        sg, target = mv.direction, mv.cmd.target
+        tol = 1e-9 * _move_scale(rec, mv.p0, pe, target) + 4e-16 * abs(target)
+        x_stop, rest = rec.x[ps], rec.x[pe]
+        ctx = (f"a stop at t = {c.sample!r} (x = {x_stop!r}, v = {rec.v[ps]!r}, a = "
+               f"{rec.a[ps]!r}) of the move to {target!r} came to rest at {rest!r}")
+        assert sg * (rest - target) <= tol, (
+            f"{ctx}, {sg * (rest - target):.3e} past the move's target\n" + rec.describe())
+        assert sg * (rest - x_stop) >= -tol, (
+            f"{ctx}, behind the position at the stop\n" + rec.describe())
+        back = -min(sg * q for q in rec.v[ps:pe + 1])
+        assert back <= tv, f"{ctx}, backing up on the way (v = {-sg * back!r})\n" + rec.describe()
+        checked += 1
+    return StopCount(checked, unchecked)
 
 
 def _moves_from_rest_any_end(rec: Record) -> list[Move]:
@@ -981,14 +967,16 @@ def check_all(drv: Driver, *, param_end: float | None = None) -> dict[str, int]:
     rec = drv.rec
     check_sane(rec)
     jerks = check_continuity(rec)
-    check_jerk_bound(rec, jerks)
+    check_jerk_bound(rec, jerks, shortened=any(SHORTENED in r.message for r in drv.g.log))
     check_rest_is_kept(rec)
     check_done_drops(rec)
     check_final(rec, param_end=param_end)
     n_moves = check_rest_to_rest(rec)
     n_ramps = check_stage_ramps(rec)
+    stops = check_stops(rec)
     check_calculated_unchanged(drv)
-    return {"rest_to_rest": n_moves, "ramps": n_ramps}
+    return {"rest_to_rest": n_moves, "ramps": n_ramps, "stops": stops.checked,
+            "stops_unchecked": stops.unchecked}
 
 
 # --------------------------------------------------------------- phase of a motion

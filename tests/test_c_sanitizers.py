@@ -41,6 +41,10 @@ PROGRAMS = {
     # targets, stops) and, in a third of them, jerk times from a changing f_mode; the
     # campaign of docs/generator.md runs `test_replan 20000 5` at -O2
     "test_replan": (["test_replan.c"], list(CORE), ["400", "7"]),
+    # a stop never rests past the target of the move it stops (issue 20): 3000 random stops
+    # in every stage of AL, JL and DJL moves (N3 < N4 and N3 > N4); the campaign runs at -O2
+    # in test_stop_campaign
+    "test_stop": (["test_stop.c"], list(CORE), ["3000", "7"]),
     # input shaping (issue 18): 1000 random shaped motions through FMI 2 beside an unshaped
     # instance (ZV, ZVD, EI, custom; delays on and off the grid; timed by f_shaper or by the
     # phase of f_mode; commands, random steps, FMU states replayed), outputs against the
@@ -114,6 +118,22 @@ def test_time_masters_run_to_the_end(tmp_path):
                           timeout=600)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "100000000 steps per master" in proc.stdout and "0 failures" in proc.stdout
+
+
+def test_stop_campaign(tmp_path):
+    """10^5 random stops (issue 20), built at -O2 (about 20 s): every stop in every stage of
+    AL, JL and DJL moves (N3 < N4 and N3 > N4) rests between the position at the stop and
+    the move's target, within the limits, never backing up (tests/c/test_stop.c); the stops
+    it cannot check are counted and may not exceed a tenth."""
+    if shutil.which("gcc") is None:
+        pytest.skip("gcc not available")
+    exe = _compile("test_stop", tmp_path, ["-O2"])
+    proc = subprocess.run([str(exe), "100000", "11"], capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "0 failures" in proc.stdout, proc.stdout
+    checked = int(proc.stdout.split(" stops checked")[0].rsplit(" ", 1)[1])
+    assert checked >= 80000, proc.stdout
 
 
 def _cpu_has_fma() -> bool:

@@ -13,6 +13,7 @@ import signal
 import subprocess
 import sys
 import textwrap
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -148,7 +149,22 @@ def test_a_new_folder_is_removed_when_nothing_was_committed(tmp_path, monkeypatc
     assert list(tmp_path.iterdir()) == []
 
 
-def test_signals_during_the_swap_are_delivered_after_it(tmp_path, monkeypatch):
+@pytest.fixture
+def python_sigint() -> Iterator[None]:
+    """Python's own SIGINT handler (KeyboardInterrupt) for one test, then the inherited one.
+
+    A suite started in the background (``nohup pytest``, ``pytest &`` from a script) inherits
+    SIGINT ignored: a test that sends itself SIGINT and expects KeyboardInterrupt installs
+    the handler it relies on.
+    """
+    prev = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, prev)
+
+
+def test_signals_during_the_swap_are_delivered_after_it(tmp_path, monkeypatch, python_sigint):
     """Ctrl-C in the middle of the swap waits for its end: the new set is whole, then the
     KeyboardInterrupt comes."""
     out = tmp_path / "out"
