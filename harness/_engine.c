@@ -637,6 +637,320 @@ f1:
     return NULL;
 }
 
+#define ADJ_FRESH 32    /* steps between two evaluations of exp, cos, sin by libm */
+#define ADJ_SMALL 1e-3  /* largest change of wd h or sig h carried by the series */
+
+/* The adjoint suffix sums of one row (adjoint_sums) into S[6 (n + 1)]: the frequencies
+ * f[k] * factor (Hz), the damping ratio z and gain g. */
+static void adjoint_row(double h, const double *f, double factor, double z, double g,
+                        Py_ssize_t n, double *S)
+{
+    const double two_pi = DJL_TWO_PI;
+    const Py_ssize_t L = n + 1;
+    double L11 = 1.0, L12 = 0.0, L21 = 0.0, L22 = 1.0, sq = sqrt(1.0 - z * z), isq = 1.0 / sq;
+    double *ea0 = &S[0], *ea1 = &S[L], *ej = &S[2 * L];
+    double *da0 = &S[3 * L], *da1 = &S[4 * L], *dj = &S[5 * L];
+    double x_prev = 0.0, y_prev = 0.0, e = 1.0, c = 1.0, sn = 0.0;
+    double sa0 = 0.0, sa1 = 0.0, sj = 0.0, sd0 = 0.0, sd1 = 0.0, sdj = 0.0;
+    int fresh = 0;
+    Py_ssize_t k;
+    ea0[n] = ea1[n] = ej[n] = da0[n] = da1[n] = dj[n] = 0.0;
+    for (k = n - 1; k >= 0; k--) {
+        /* as adjoint_modes (on f factor); the step's exp(-sig h), cos and sin(wd h) carried
+         * from the next step's by the small change of the frequency (angle addition, series
+         * to within an ulp), taken from libm again every ADJ_FRESH steps and whenever the
+         * change is not small: within ~1e-14 of adjoint_modes' (tested), half the cost */
+        double omega = two_pi * (factor == 1.0 ? f[k] : f[k] * factor);
+        double sig = z * omega, w2 = omega * omega, wd = omega * sq;
+        double x = wd * h, y = sig * h, d = x - x_prev, dy = y_prev - y, s, iw, iw2;
+        if (fresh > 0 && fabs(d) <= ADJ_SMALL && fabs(dy) <= ADJ_SMALL) {
+            double d2 = d * d, cd, sd, nc;
+            if (d != 0.0) {
+                cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0 - d2 * (1.0 / 720.0)));
+                sd = d * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0)));
+                nc = c * cd - sn * sd;
+                sn = sn * cd + c * sd;
+                c = nc;
+            }
+            if (dy != 0.0)
+                e *= 1.0 + dy * (1.0 + dy * (0.5 + dy * (1.0 / 6.0 + dy * (1.0 / 24.0))));
+            fresh--;
+        } else {
+            e = exp(-y);
+            c = cos(x);
+            sn = sin(x);
+            fresh = ADJ_FRESH;
+        }
+        x_prev = x;
+        y_prev = y;
+        iw = 1.0 / omega; /* the one division of the step */
+        iw2 = iw * iw;
+        s = sn * (iw * isq);
+        double P11 = e * (c + sig * s), P12 = e * s, P21 = -e * w2 * s;
+        double P22 = e * (c - sig * s);
+        double ka = -g * iw2, kj = 2.0 * sig * g * (iw2 * iw2);
+        double G1a = (1.0 - P11) * ka, G1j = (1.0 - P11) * kj + (h - P12) * ka;
+        double G2a = -P21 * ka, G2j = -P21 * kj + (1.0 - P22) * ka;
+        double o0 = L11 * G1a + L12 * G2a, o1 = L11 * G1j + L12 * G2j;
+        double o2 = L21 * G1a + L22 * G2a, o3 = L21 * G1j + L22 * G2j;
+        double N11, N12, N21, N22, kk = (double)k;
+        ea0[k] = sa0 += o0;
+        ea1[k] = sa1 += kk * o0;
+        ej[k] = sj += o1;
+        da0[k] = sd0 += o2;
+        da1[k] = sd1 += kk * o2;
+        dj[k] = sdj += o3;
+        N11 = L11 * P11 + L12 * P21;
+        N12 = L11 * P12 + L12 * P22;
+        N21 = L21 * P11 + L22 * P21;
+        N22 = L21 * P12 + L22 * P22;
+        L11 = N11;
+        L12 = N12;
+        L21 = N21;
+        L22 = N22;
+    }
+}
+
+/* Plan.adjoint_residuals(m, k_end, S, sig, wd, n_modes, order, bound, out, ready, start,
+ *                         fill=None) -> int
+ *   The residual of this (unshaped) plan under each point of a perturbation set, from the
+ *   suffix sums S of the plant's adjoint (adjoint_sums): the final state of row r is
+ *   sum_k psi[r, k] (a_k, j_k) over the steps k < k_end (FMU sample k m), and over one
+ *   constant-jerk piece a_k is linear in k, so each piece costs three differences of S per
+ *   row instead of a sum over its samples.  Rows are point-major (row = point * n_modes +
+ *   mode); sig = zeta omega and wd = omega sqrt(1 - zeta^2) of each row at the end.
+ *   out[p] = the free-oscillation amplitude summed over the modes, for p = order[q],
+ *   q = start, start + 1, ..., until one is >= bound: returns how many entries of order
+ *   are then done (len(order) when none reached bound); or -(q + 1) when the rows of
+ *   order[q] are not computed yet (ready[order[q]] == 0, uint8), the entries before it
+ *   done.  With fill = (h, f_nom, zeta, gain, f_end, factors), a point of a map-scale set
+ *   (its rows the nominal ones, every frequency times factors[point]) that is not ready is
+ *   computed here (its rows of S, sig and wd, as adjoint_sums and the Python side do) and
+ *   marked ready. */
+static PyObject *plan_adjoint_residuals(PlanObject *self, PyObject *args)
+{
+    PyObject *oS, *osig, *owd, *oord, *oout, *ordy, *fill = Py_None;
+    long long m;
+    Py_ssize_t k_end, nm, R, n_pts, n_ord, q, start, done;
+    double bound, fh = 0.0;
+    Py_buffer bS, bsig, bwd, bord, bout, brdy, bfill[5];
+    int filling = 0, nfill = 0, j;
+    if (!PyArg_ParseTuple(args, "LnOOOnOdOOn|O", &m, &k_end, &oS, &osig, &owd, &nm, &oord,
+                          &bound, &oout, &ordy, &start, &fill))
+        return NULL;
+    if (m < 1 || k_end < 0 || nm < 1 || start < 0) {
+        PyErr_SetString(PyExc_ValueError, "m must be >= 1, k_end >= 0, n_modes >= 1 and "
+                        "start >= 0");
+        return NULL;
+    }
+    done = start;
+    if (self->shaper.n > 0) {
+        PyErr_SetString(PyExc_ValueError, "adjoint_residuals needs an unshaped plan");
+        return NULL;
+    }
+    if (PyObject_GetBuffer(osig, &bsig, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) return NULL;
+    R = bsig.len / 8;
+    PyBuffer_Release(&bsig);
+    if (R < nm || R % nm) {
+        PyErr_SetString(PyExc_ValueError, "sig must hold n_points * n_modes values");
+        return NULL;
+    }
+    n_pts = R / nm;
+    if (PyObject_GetBuffer(oord, &bord, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) return NULL;
+    if (bord.itemsize != 8 || !bord.format || (strcmp(bord.format, "q") != 0 &&
+                                                strcmp(bord.format, "l") != 0)) {
+        PyErr_SetString(PyExc_ValueError, "order must be a C-contiguous int64 array");
+        PyBuffer_Release(&bord);
+        return NULL;
+    }
+    n_ord = bord.len / 8;
+    for (q = 0; q < n_ord; q++) {
+        long long p = ((const long long *)bord.buf)[q];
+        if (p < 0 || p >= n_pts) {
+            PyErr_Format(PyExc_ValueError, "order[%zd] = %lld is not a point index", q, p);
+            PyBuffer_Release(&bord);
+            return NULL;
+        }
+    }
+    if (get_out_buffer(oS, &bS, R * 6 * (k_end + 1), "S") < 0) goto f1;
+    if (get_out_buffer(osig, &bsig, R, "sig") < 0) goto f2;
+    if (get_out_buffer(owd, &bwd, R, "wd") < 0) goto f3;
+    if (get_out_buffer(oout, &bout, n_pts, "out") < 0) goto f4;
+    if (PyObject_GetBuffer(ordy, &brdy, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE) < 0) goto f5;
+    if (brdy.len < n_pts) {
+        PyErr_SetString(PyExc_ValueError, "ready must hold one byte per point");
+        goto f6;
+    }
+    {
+        unsigned char *ready = brdy.buf;
+        const djl_plan *pl = &self->plan;
+        double *S = bS.buf, *sig = bsig.buf, *wd = bwd.buf;
+        const long long *ord = bord.buf;
+        double *out = bout.buf;
+        const double Te = pl->p.Te;
+        const long long off = (long long)self->offset;
+        const Py_ssize_t L = k_end + 1;
+        /* each piece: the steps [k0, k1) it covers, and a_k = c0 + c1 k, j_k = j over them */
+        Py_ssize_t np = 0, i;
+        Py_ssize_t K0[DJL_MAX_PIECES], K1[DJL_MAX_PIECES];
+        double C0[DJL_MAX_PIECES], C1[DJL_MAX_PIECES], J[DJL_MAX_PIECES];
+        for (i = 0; i < pl->n_pieces; i++) {
+            const djl_piece *pc = &pl->piece[i];
+            long long lo = pc->k + off, hi;
+            long long k0 = lo <= 0 ? 0 : (lo + m - 1) / m, k1;
+            if (i + 1 < pl->n_pieces) {
+                hi = pl->piece[i + 1].k + off;
+                k1 = hi <= 0 ? 0 : (hi + m - 1) / m;
+            } else {
+                k1 = k_end;
+            }
+            if (k1 > k_end) k1 = k_end;
+            if (k0 >= k1 || (pc->a == 0.0 && pc->j == 0.0)) continue;
+            K0[np] = (Py_ssize_t)k0;
+            K1[np] = (Py_ssize_t)k1;
+            /* a_k = C0 + C1 (k - k0): C0 as djl_eval gives it at step k0 */
+            C0[np] = pc->a + (double)(k0 * m - off - pc->k) * Te * pc->j;
+            C1[np] = pc->j * Te * (double)m;
+            J[np] = pc->j;
+            np++;
+        }
+        for (q = start; q < n_ord; q++) {
+            Py_ssize_t p = (Py_ssize_t)ord[q];
+            double total = 0.0;
+            if (!ready[p] && fill != Py_None && !filling) {
+                /* fill = (h, f_nom (n_modes, k_end), zeta, gain, f_end (n_modes),
+                 * factors (n_points)): a point is the nominal rows, every frequency times
+                 * its factor; read once, when a point is first missing */
+                static const char *what[5] = {"f_nom", "zeta", "gain", "f_end", "factors"};
+                Py_ssize_t sizes[5];
+                sizes[0] = nm * k_end;
+                sizes[1] = sizes[2] = sizes[3] = nm;
+                sizes[4] = n_pts;
+                if (!PyTuple_Check(fill) || PyTuple_GET_SIZE(fill) != 6) {
+                    PyErr_SetString(PyExc_ValueError, "fill must be (h, f_nom, zeta, gain, "
+                                    "f_end, factors)");
+                    done = PY_SSIZE_T_MIN;
+                    break;
+                }
+                fh = PyFloat_AsDouble(PyTuple_GET_ITEM(fill, 0));
+                if (fh == -1.0 && PyErr_Occurred()) {
+                    done = PY_SSIZE_T_MIN;
+                    break;
+                }
+                for (j = 0; j < 5; j++) {
+                    if (get_in_buffer(PyTuple_GET_ITEM(fill, j + 1), &bfill[j], sizes[j],
+                                      what[j]) < 0)
+                        break;
+                    nfill++;
+                }
+                if (nfill < 5) {
+                    done = PY_SSIZE_T_MIN;
+                    break;
+                }
+                filling = 1;
+            }
+            if (!ready[p] && filling) {
+                const double *fn = bfill[0].buf, *zt = bfill[1].buf, *gn = bfill[2].buf;
+                const double *fe = bfill[3].buf, *fac = bfill[4].buf;
+                for (i = 0; i < nm; i++) {
+                    Py_ssize_t r = p * nm + i;
+                    /* as the Python side: w = 2 pi (f_end c) */
+                    double w = DJL_TWO_PI * (fe[i] * fac[p]);
+                    adjoint_row(fh, &fn[i * k_end], fac[p], zt[i], gn[i], k_end,
+                                &S[r * 6 * L]);
+                    sig[r] = zt[i] * w;
+                    wd[r] = w * sqrt(1.0 - zt[i] * zt[i]);
+                }
+                ready[p] = 1;
+            }
+            if (!ready[p]) {
+                done = -(q + 1);
+                break;
+            }
+            for (i = 0; i < nm; i++) {
+                Py_ssize_t r = p * nm + i;
+                double st[2];
+                int c;
+                for (c = 0; c < 2; c++) {
+                    const double *A0 = &S[((r * 2 + c) * 3 + 0) * L];
+                    const double *A1 = &S[((r * 2 + c) * 3 + 1) * L];
+                    const double *J0 = &S[((r * 2 + c) * 3 + 2) * L];
+                    double acc = 0.0;
+                    Py_ssize_t e;
+                    for (e = 0; e < np; e++) {
+                        Py_ssize_t a = K0[e], b = K1[e];
+                        double s0 = A0[a] - A0[b], sj = J0[a] - J0[b];
+                        /* sum over the piece of (k - k0) psi_a */
+                        double s1 = (A1[a] - A1[b]) - (double)a * s0;
+                        acc += C0[e] * s0 + C1[e] * s1 + J[e] * sj;
+                    }
+                    st[c] = acc;
+                }
+                total += hypot(st[0], (st[1] + sig[r] * st[0]) / wd[r]);
+            }
+            out[p] = total;
+            done = q + 1;
+            if (total >= bound) break;
+        }
+    }
+    for (j = 0; j < nfill; j++) PyBuffer_Release(&bfill[j]);
+    PyBuffer_Release(&brdy);
+    PyBuffer_Release(&bout);
+    PyBuffer_Release(&bwd);
+    PyBuffer_Release(&bsig);
+    PyBuffer_Release(&bS);
+    PyBuffer_Release(&bord);
+    if (done == PY_SSIZE_T_MIN) return NULL;
+    return PyLong_FromSsize_t(done);
+f6:
+    PyBuffer_Release(&brdy);
+f5:
+    PyBuffer_Release(&bout);
+f4:
+    PyBuffer_Release(&bwd);
+f3:
+    PyBuffer_Release(&bsig);
+f2:
+    PyBuffer_Release(&bS);
+f1:
+    PyBuffer_Release(&bord);
+    return NULL;
+}
+
+/* Plan.replan(T_F1, T_F2, T_F3, T_F4) -> Plan: the same (unshaped) move planned again with
+ * other jerk times (s), its other parameters and start as this plan's: what plan() gives for
+ * the same parameters, without reading them from a dict (the tuning searches plan
+ * thousands of moves that differ in their jerk times only). */
+static PyObject *plan_replan(PlanObject *self, PyObject *args)
+{
+    double T[4];
+    djl_params p;
+    djl_error err;
+    djl_status st;
+    PlanObject *obj;
+    int i;
+    if (!PyArg_ParseTuple(args, "dddd", &T[0], &T[1], &T[2], &T[3])) return NULL;
+    if (self->shaper.n > 0) {
+        PyErr_SetString(PyExc_ValueError, "replan needs an unshaped plan");
+        return NULL;
+    }
+    obj = PyObject_New(PlanObject, &PlanType);
+    if (!obj) return NULL;
+    p = self->plan.p;
+    for (i = 0; i < 4; i++) p.T_F[i] = T[i];
+    obj->t_start = self->t_start;
+    obj->start_time = self->start_time;
+    obj->shaper = self->shaper;
+    memset(&err, 0, sizeof err);
+    st = plan_into(&p, obj->t_start, obj->start_time, &obj->plan, &err, &obj->offset,
+                   &obj->shifted);
+    if (st != DJL_OK) {
+        Py_DECREF(obj);
+        return raise_plan_error(&err, st);
+    }
+    return (PyObject *)obj;
+}
+
 static PyGetSetDef plan_getset[] = {
     {"motion_time", (getter)plan_get_motion_time, NULL,
      "Duration of the motion, filters included (s); with a shaper, until its last delayed "
@@ -666,6 +980,14 @@ static PyMethodDef plan_methods[] = {
     {"residuals", (PyCFunction)plan_residuals, METH_VARARGS,
      "residuals(m, k_end, h, f_mid, zeta, gain, f_end, factors, out): free-oscillation "
      "amplitude (sum over the modes) at communication point k_end, for each frequency factor."},
+    {"replan", (PyCFunction)plan_replan, METH_VARARGS,
+     "replan(T_F1, T_F2, T_F3, T_F4) -> Plan: this (unshaped) move planned again with other "
+     "jerk times (s), as plan() would for the same parameters."},
+    {"adjoint_residuals", (PyCFunction)plan_adjoint_residuals, METH_VARARGS,
+     "adjoint_residuals(m, k_end, S, sig, wd, n_modes, order, bound, out, ready, start, "
+     "fill=None) -> int: the residual (sum over the modes) under each point in order from start, from the "
+     "suffix sums S of adjoint_sums, until one is >= bound; returns how many entries are "
+     "done, or -(q + 1) when the point order[q] is not ready (fill: computed here)."},
     {"eval", (PyCFunction)(void (*)(void))plan_eval, METH_VARARGS | METH_KEYWORDS,
      "eval(times, side=\"right\") -> (x, v, a, j): the (shaped) profile at times (s, FMU time; "
      "a time within 1e-9 of a sample is that sample), limits from the right (jerk over the "
@@ -1029,6 +1351,73 @@ fail_f:
     return NULL;
 }
 
+/* adjoint_sums(h, f, zeta, gain, n, S, factor=1.0)
+ *   The adjoint of adjoint_modes (the same psi, computed the same way), kept as suffix sums:
+ *   S[r, i, 0, k] = sum_{k' >= k} psi[r, k', i, a], S[r, i, 1, k] = sum_{k' >= k} k' psi[r, k',
+ *   i, a], S[r, i, 2, k] = sum_{k' >= k} psi[r, k', i, j], for k = 0..n (S[.., n] = 0).  The
+ *   final state of an input whose a_k is linear and j_k constant over steps [k0, k1) is then a
+ *   few differences of S (Plan.adjoint_residuals).  S: (R, 2, 3, n + 1) output.  With
+ *   factor, every frequency is f[r, k] * factor (a map scaled by it). */
+static PyObject *engine_adjoint_sums(PyObject *self, PyObject *args)
+{
+    PyObject *of, *oz, *og, *op;
+    double h, factor = 1.0;
+    Py_ssize_t n, R, r, k, L;
+    Py_buffer bf, bz, bg, bp;
+    const double *f, *zeta, *gain;
+    double *S;
+    (void)self;
+    if (!PyArg_ParseTuple(args, "dOOOnO|d", &h, &of, &oz, &og, &n, &op, &factor)) return NULL;
+    if (n < 0 || !(h > 0.0) || !isfinite(h) || !(factor > 0.0) || !isfinite(factor)) {
+        PyErr_SetString(PyExc_ValueError, "n must be >= 0, h and factor finite numbers > 0");
+        return NULL;
+    }
+    if (PyObject_GetBuffer(oz, &bz, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0) return NULL;
+    R = bz.len / 8;
+    PyBuffer_Release(&bz);
+    L = n + 1;
+    if (get_in_buffer(of, &bf, R * n, "f") < 0) return NULL;
+    if (get_in_buffer(oz, &bz, R, "zeta") < 0) goto fail_f;
+    if (get_in_buffer(og, &bg, R, "gain") < 0) goto fail_z;
+    if (get_out_buffer(op, &bp, R * 6 * L, "S") < 0) goto fail_g;
+    f = bf.buf;
+    zeta = bz.buf;
+    gain = bg.buf;
+    S = bp.buf;
+    for (r = 0; r < R; r++) {
+        if (!(zeta[r] >= 0.0 && zeta[r] < 1.0)) {
+            PyErr_Format(PyExc_ValueError, "row %zd: damping ratio %g not in [0, 1)", r,
+                         zeta[r]);
+            goto fail_all;
+        }
+    }
+    for (k = 0; k < R * n; k++) {
+        if (!(f[k] > 0.0) || !isfinite(f[k])) {
+            PyErr_Format(PyExc_ValueError, "row %zd: frequency %g Hz at step %zd is not a finite "
+                         "number > 0", k / (n ? n : 1), f[k], k % (n ? n : 1));
+            goto fail_all;
+        }
+    }
+    Py_BEGIN_ALLOW_THREADS
+    for (r = 0; r < R; r++)
+        adjoint_row(h, &f[r * n], factor, zeta[r], gain[r], n, &S[r * 6 * L]);
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&bp);
+    PyBuffer_Release(&bg);
+    PyBuffer_Release(&bz);
+    PyBuffer_Release(&bf);
+    Py_RETURN_NONE;
+fail_all:
+    PyBuffer_Release(&bp);
+fail_g:
+    PyBuffer_Release(&bg);
+fail_z:
+    PyBuffer_Release(&bz);
+fail_f:
+    PyBuffer_Release(&bf);
+    return NULL;
+}
+
 /* ---------------------------------------------------------------- module */
 
 static PyMethodDef engine_methods[] = {
@@ -1049,6 +1438,10 @@ static PyMethodDef engine_methods[] = {
     {"adjoint_modes", engine_adjoint_modes, METH_VARARGS,
      "adjoint_modes(h, f, zeta, gain, n, psi): psi[r, k] = d (eps, deps)(n) / d (a_k, j_k) of "
      "each row r (a mode, frequencies f[r, k]) stepped as step_modes does."},
+    {"adjoint_sums", engine_adjoint_sums, METH_VARARGS,
+     "adjoint_sums(h, f, zeta, gain, n, S, factor=1.0): the adjoint of adjoint_modes as suffix sums, "
+     "S[r, i, (a, k a, j), k] = sum over k' >= k of psi[r, k', i, .] (times k' for the "
+     "second); S: (R, 2, 3, n + 1); frequencies f * factor."},
     {NULL, NULL, 0, NULL},
 };
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+from collections.abc import Sequence
 
 from . import __version__
 from .compiled import EngineMissingError
@@ -96,8 +97,12 @@ def _shorten_help(name: str, p: argparse.ArgumentParser) -> None:
                    help="the full help: every output file, the scenario keys, examples")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Build the argument parser with every available command."""
+def build_parser(commands: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """Build the argument parser with every available command (or only ``commands``).
+
+    Each command's module is imported to register its options, and some import
+    heavy libraries: :func:`main` registers only the command it runs.
+    """
     parser = argparse.ArgumentParser(
         prog="djl-fmu",
         description=(
@@ -110,7 +115,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="<command>")
-    for name in COMMANDS:
+    for name in COMMANDS if commands is None else commands:
         try:
             module = importlib.import_module(f"harness.commands.{name}")
         except ModuleNotFoundError as e:
@@ -125,8 +130,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``djl-fmu``; returns the exit status."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    given = sys.argv[1:] if argv is None else list(argv)
+    # "djl-fmu simulate ...": only that command's module is imported; anything else (help,
+    # --version, an unknown command) builds the whole parser
+    parser = build_parser([given[0]] if given and given[0] in COMMANDS else None)
+    args = parser.parse_args(given)
     if not getattr(args, "func", None):
         parser.print_help()
         return 2

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import hashlib
 import json
 import os
 import shutil
@@ -53,12 +54,15 @@ from pathlib import Path, PurePosixPath
 from types import FrameType, TracebackType
 from typing import Any
 
+import numpy as np
+
 try:
     import fcntl
 except ImportError:  # pragma: no cover - not POSIX: no locking, stale folders ignored
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["TMP_PREFIX", "OutputSet", "Terminated", "recover_stale", "save_figure",
+__all__ = ["FIGURE_CACHE_SIZE", "TMP_PREFIX", "OutputSet", "Terminated", "figure_digest",
+           "recover_stale", "save_figure",
            "signals_deferred", "sigterm_raises", "write_csv", "write_set", "write_text"]
 
 TMP_PREFIX = ".djl-fmu-tmp-"
@@ -519,16 +523,111 @@ def write_mat(path: str | os.PathLike[str], variables: Mapping[str, Any]) -> Pat
     return path
 
 
-def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int = 110) -> Path:
-    """Save a matplotlib figure atomically (temporary file, then rename) and close it."""
+def _artist_state(a: Any) -> list[Any]:
+    """Return what a matplotlib artist draws, for :func:`figure_digest` (data as bytes)."""
+    out: list[Any] = [type(a).__name__, a.get_visible(), a.get_alpha(), a.get_zorder(),
+                      a.get_clip_on()]
+    for name in ("get_text", "get_position", "get_fontsize", "get_fontweight", "get_rotation",
+                 "get_horizontalalignment", "get_verticalalignment", "get_color",
+                 "get_linewidth", "get_linestyle", "get_marker", "get_markersize",
+                 "get_drawstyle", "get_markerfacecolor", "get_markeredgecolor",
+                 "get_facecolor", "get_edgecolor", "get_hatch", "get_xlim", "get_ylim",
+                 "get_xscale", "get_yscale", "get_sizes", "get_linewidths", "get_cmap",
+                 "get_clim", "get_extent"):
+        f = getattr(a, name, None)
+        if f is None:
+            continue
+        try:
+            v = f()
+        except (TypeError, ValueError, AttributeError, NotImplementedError):
+            continue
+        if name == "get_cmap":
+            v = getattr(v, "name", None)
+        elif isinstance(v, np.ndarray):
+            v = v.tobytes()
+        out.append((name, v))
+    for name in ("get_xydata", "get_offsets", "get_array"):
+        f = getattr(a, name, None)
+        v = f() if f is not None else None
+        if v is not None:
+            out.append((name, np.ma.getdata(np.asarray(v, dtype=float)).tobytes()))
+    if hasattr(a, "get_path") and hasattr(a, "get_patch_transform"):  # patches: their shape
+        out.append(a.get_path().vertices.tobytes())
+        out.append(a.get_patch_transform().get_matrix().tobytes())
+    if hasattr(a, "get_paths"):
+        out.extend(p.vertices.tobytes() for p in a.get_paths())
+    if hasattr(a, "get_position") and hasattr(a, "get_subplotspec"):  # axes: where they are
+        out.append(a.get_position(original=True).bounds)
+    if hasattr(a, "get_major_ticks"):  # an axis: its tick settings (the ticks follow)
+        out.append(sorted((k, repr(v)) for k, v in a._major_tick_kw.items()))
+        out.append(sorted((k, repr(v)) for k, v in a._minor_tick_kw.items()))
+        out.append((type(a.get_major_locator()).__name__, type(a.get_major_formatter()).__name__,
+                    type(a.get_minor_locator()).__name__))
+    return out
+
+
+def _drawn(a: Any) -> Iterator[Any]:
+    """Yield an artist and what it draws, depth first; an axis' ticks are not made.
+
+    The ticks of an axis follow from its limits, scale, locator, formatter and
+    tick settings (all in its parent's and its own state); asking an axis for
+    its children would create them, the most costly part of a figure.
+    """
+    yield a
+    if hasattr(a, "get_major_ticks"):
+        yield a.label
+        return
+    for c in a.get_children():
+        yield from _drawn(c)
+
+
+def figure_digest(fig: Any, dpi: int, salt: str = "") -> str:
+    """Return a digest of what a matplotlib figure draws: equal digests, equal PNG files.
+
+    Every artist of the figure contributes its type and what it draws (data,
+    text, colours, styles, limits, scales, tick settings), with the figure size,
+    ``dpi``, matplotlib's version and rcParams, and ``salt`` (e.g. a digest of
+    the code that made the figure).
+    """
+    import matplotlib  # deferred: matplotlib is heavy to import
+
+    h = hashlib.sha256()
+    h.update(repr((salt, matplotlib.__version__, dpi, tuple(fig.get_size_inches()),
+                   fig.subplotpars.left, fig.subplotpars.right, fig.subplotpars.top,
+                   fig.subplotpars.bottom, fig.subplotpars.wspace, fig.subplotpars.hspace,
+                   sorted((k, repr(v)) for k, v in matplotlib.rcParams.items()))).encode())
+    for a in _drawn(fig):
+        for item in _artist_state(a):
+            h.update(item if isinstance(item, bytes) else repr(item).encode())
+    return h.hexdigest()
+
+
+def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int = 110, *,
+                cache: str | os.PathLike[str] | None = None, salt: str = "") -> Path:
+    """Save a matplotlib figure atomically (temporary file, then rename) and close it.
+
+    With ``cache`` (a folder), a figure drawing what one saved before draws
+    (:func:`figure_digest`, with ``salt``) is not rendered again: its PNG is
+    copied from the folder, which keeps the last :data:`FIGURE_CACHE_SIZE`.
+    """
     import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
     path = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
     os.close(fd)
     try:
-        # PNG level 1: a third of the encoding time of the default, files ~15 % larger
-        fig.savefig(tmp, dpi=dpi, pil_kwargs={"compress_level": 1})
+        cached = None
+        if cache is not None:
+            cached = Path(cache) / f"{figure_digest(fig, dpi, salt)}{path.suffix}"
+        if cached is not None and cached.is_file():
+            shutil.copyfile(cached, tmp)
+            with contextlib.suppress(OSError):
+                os.utime(cached)  # recently used: kept
+        else:
+            # PNG level 1: a third of the encoding time of the default, files ~15 % larger
+            fig.savefig(tmp, dpi=dpi, pil_kwargs={"compress_level": 1})
+            if cached is not None:
+                _keep_figure(Path(tmp), cached)
         os.chmod(tmp, _umask_mode())
         os.replace(tmp, path)
     except BaseException:
@@ -537,3 +636,26 @@ def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int = 110) -> Path:
     finally:
         plt.close(fig)
     return path
+
+
+FIGURE_CACHE_SIZE = 64
+"""Figures a :func:`save_figure` cache folder keeps (the least recently used go)."""
+
+
+def _keep_figure(src: Path, dest: Path) -> None:
+    """Copy a rendered figure into its cache folder (atomically); drop the oldest ones."""
+    try:
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=".fig.", dir=dest.parent)
+        os.close(fd)
+        try:
+            shutil.copyfile(src, tmp)
+            os.replace(tmp, dest)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+        kept = sorted(dest.parent.glob(f"*{dest.suffix}"), key=lambda p: p.stat().st_mtime)
+        for old in kept[:-FIGURE_CACHE_SIZE]:
+            old.unlink(missing_ok=True)
+    except OSError:  # a read-only or full cache: rendered again next time
+        pass

@@ -794,7 +794,8 @@ class SweepResult(TableMixin):
                                f"residual {st['residual'].mean:+.1f} % on average, settling time "
                                f"{st['settling'].mean:+.1f} % ({self.band_label})"),
                      fontsize="medium")
-        fig.tight_layout()
+        # fixed margins (for these labels at this size): no layout pass before the drawing
+        fig.subplots_adjust(left=0.07, right=0.985, top=0.87, bottom=0.1, wspace=0.25)
         return fig
 
 

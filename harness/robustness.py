@@ -205,7 +205,8 @@ class RobustnessResult:
         name = self.scenario.name if self.scenario is not None else ""
         ax.set_title(title or f"{name}: robustness to a map error, {self.label}",
                      fontsize="medium")
-        fig.tight_layout()
+        # fixed margins (for these labels at this size): no layout pass before the drawing
+        fig.subplots_adjust(left=0.1, right=0.98, top=0.94, bottom=0.1)
         return fig
 
 

@@ -378,3 +378,77 @@ def test_every_sweep_move_is_the_same_through_both_engines(fmu2, name):
                             "rise_time"):
                     va, vb = getattr(pa.metrics, key), getattr(pb.metrics, key)
                     assert _same(va, vb), (case.name, prof, key, va, vb)
+
+
+# ------------------------------------------- the robust search's objective (issue 18)
+
+
+def _adjoint_case():
+    pl = _engine.plan({"profile": 3, "distance": 0.3, "v_max": 0.6, "a_max": 3.0,
+                       "d_max": 3.0, "T_F1": 0.11, "T_F2": 0.09, "T_F3": 0.12, "T_F4": 0.1,
+                       "t_start": 0.05})
+    m, h = 2, 2e-3
+    k_end = int(math.ceil((pl.motion_time + 0.05) / h))
+    rng = np.random.default_rng(7)
+    f_nom = np.ascontiguousarray(np.vstack([7 + rng.random(k_end), 18 + rng.random(k_end)]))
+    zeta, gain, f_end = np.array([0.03, 0.01]), np.array([1.0, 0.3]), np.array([7.2, 18.4])
+    return pl, m, h, k_end, f_nom, zeta, gain, f_end
+
+
+def test_adjoint_sums_give_the_residuals_of_stepping_the_plant():
+    """Plan.adjoint_residuals (three differences of adjoint_sums per constant-jerk piece)
+    against Plan.residuals (the plant stepped over every sample), two modes, three map
+    scales, a start off the communication grid; the bound stops at the first point reaching
+    it; adjoint_sums' psi equals adjoint_modes' (their cumulative sums)."""
+    pl, m, h, k_end, f_nom, zeta, gain, f_end = _adjoint_case()
+    factors = np.array([0.9, 1.0, 1.07])
+    ref = np.empty(3)
+    pl.residuals(m, k_end, h, f_nom, zeta, gain, f_end, factors, ref)
+    R = 2 * len(factors)
+    S = np.empty((R, 2, 3, k_end + 1))
+    for q, c in enumerate(factors):
+        _engine.adjoint_sums(h, f_nom, zeta, gain, k_end, S[2 * q:2 * q + 2], c)
+    w = 2 * np.pi * np.outer(factors, f_end).ravel()
+    z = np.tile(zeta, 3)
+    sig, wd = z * w, w * np.sqrt(1 - z * z)
+    out, ready, order = np.empty(3), np.ones(3, dtype=np.uint8), np.array([2, 0, 1])
+    assert pl.adjoint_residuals(m, k_end, S, sig, wd, 2, order, math.inf, out, ready, 0) == 3
+    np.testing.assert_allclose(out, ref, rtol=1e-10)
+    # a bound: stops after the first point at or above it
+    out2 = np.full(3, -1.0)
+    n = pl.adjoint_residuals(m, k_end, S, sig, wd, 2, order, out[2] * 0.5, out2, ready, 0)
+    assert n == 1 and out2[2] == out[2] and out2[0] == -1.0
+    # a point not ready: -(position + 1), the points before it done
+    ready[0] = 0
+    assert pl.adjoint_residuals(m, k_end, S, sig, wd, 2, order, math.inf, out2, ready, 0) == -2
+    # the fill: the missing point computed in C, as the rows above
+    S2, sig2, wd2 = S.copy(), sig.copy(), wd.copy()
+    S2[0:2] = 0.0
+    n = pl.adjoint_residuals(m, k_end, S2, sig2, wd2, 2, order, math.inf, out2, ready, 0,
+                             (h, f_nom, zeta, gain, f_end, factors))
+    assert n == 3 and ready[0] == 1
+    np.testing.assert_array_equal(S2, S)
+    np.testing.assert_array_equal(out2, out)
+    # the same psi as adjoint_modes
+    psi = np.empty((2, k_end, 2, 2))
+    _engine.adjoint_modes(h, f_nom, zeta, gain, k_end, psi)
+    np.testing.assert_allclose(S[2:4, :, 0, 0], psi[:, :, :, 0].sum(axis=1), rtol=1e-12,
+                               atol=1e-12 * np.abs(psi).max() * k_end)
+
+
+def test_replan_equals_planning_the_same_parameters():
+    base = {"profile": 3, "distance": 0.3, "v_max": 0.6, "a_max": 3.0, "d_max": 3.0,
+            "T_F1": 0.11, "T_F2": 0.09, "T_F3": 0.12, "T_F4": 0.1, "t_start": 0.05}
+    pl = _engine.plan(base)
+    new = {**base, "T_F1": 0.05, "T_F2": 0.2, "T_F3": 0.07, "T_F4": 0.15}
+    a, b = pl.replan(0.05, 0.2, 0.07, 0.15), _engine.plan(new)
+    assert a.motion_time == b.motion_time and a.N_F == b.N_F and a.offset == b.offset
+    X, Y = np.empty((7, 900)), np.empty((7, 900))
+    a.sample_into(X, 0, 1, 900)
+    b.sample_into(Y, 0, 1, 900)
+    np.testing.assert_array_equal(X, Y)
+    with pytest.raises(_engine.PlanError, match="T_F2"):
+        pl.replan(0.05, -1.0, 0.07, 0.15)
+    shaped = _engine.plan({**base, "shaper": 1, "f_shaper": 8.0})
+    with pytest.raises(ValueError, match="unshaped"):
+        shaped.replan(0.1, 0.1, 0.1, 0.1)

@@ -54,6 +54,53 @@ def test_pattern_search_keeps_the_best_start_and_respects_the_box():
     assert best == (7, 6) and all(2 <= a <= 7 and 2 <= b <= 6 for a, b in cache)
 
 
+def test_bounded_search_takes_the_path_of_the_exact_one():
+    """A bounded objective (a lower bound >= the bound, not its value, once a point is known to
+    be rejected) gives the same best point, the same points visited and the same exact
+    values: the pruned robust search returns what the exact one returns."""
+    rng = np.random.default_rng(3)
+    w = rng.random((5, 4))
+
+    def parts(p):  # five "perturbations", the objective their largest
+        x = np.array(p, dtype=float)
+        return [float(np.sum(wi * np.sin(x / (3 + 2 * i)) ** 2) + 1e-3 * np.sum((x - 40) ** 2))
+                for i, wi in enumerate(w)]
+
+    def exact(p):
+        return max(parts(p))
+
+    def bounded(p, bound):
+        v = parts(p)
+        for i, vi in enumerate(v):
+            if vi >= bound:
+                return max(v[:i + 1]), False
+        return max(v), True
+
+    starts = [(30, 30, 30, 30), (50, 20, 45, 35)]
+    b1, v1, c1 = pattern_search(exact, starts, (1,) * 4, (80,) * 4, tied=True)
+    b2, v2, c2 = pattern_search(bounded, starts, (1,) * 4, (80,) * 4, tied=True, bounded=True)
+    assert (b1, v1) == (b2, v2)
+    assert set(c1) == set(c2)
+    assert all(c2[p] == c1[p] or c1[p] >= c2[p] for p in c1)
+
+
+def test_robust_search_objective_equals_stepping_the_plant(fast):
+    """The search's objective (adjoint sums, pieces of the plan) against the plant stepped
+    forward, on the tuning set, for a few jerk times of scenario Y."""
+    from harness.tuning.search import Objective
+
+    sc = load_scenario("Y")
+    obj = Objective(sc, fast, "DJL")
+    pts = sc.uncertainty.tuning_set().points
+    for N in ((100, 90, 110, 95), (120, 120, 120, 120), (80, 130, 100, 140)):
+        T, r = obj.residuals(N, pts)
+        ref = fast.residuals_under(sc, "DJL", tuple(n * sc.simulation.Te for n in N), pts)
+        np.testing.assert_allclose(r, ref, rtol=1e-9)
+        order = np.argsort(-r, kind="stable")
+        T2, v, exact, _ = obj.worst(N, pts, order, bound=0.5 * r.max())
+        assert T2 == T and not exact and v == r.max()
+
+
 def test_profile_names():
     assert split_profile("DJL-robust") == ("DJL", "robust")
     assert split_profile("JL") == ("JL", None)

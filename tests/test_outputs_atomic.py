@@ -459,3 +459,53 @@ def _ppid(proc_dir: Path) -> int | None:
     except OSError:
         return None
     return int(stat.rsplit(")", 1)[1].split()[1])
+
+
+# ------------------------------------------------------ figures not drawn twice (issue 18)
+
+
+def _figure(y, title="t"):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(3, 2))
+    ax.plot([0.0, 1.0, 2.0], y, label="a")
+    ax.legend()
+    ax.set_title(title)
+    return fig
+
+
+def test_a_figure_drawn_before_is_copied_from_the_cache(tmp_path, monkeypatch):
+    cache = tmp_path / "figures"
+    first = files.save_figure(_figure([0.0, 1.0, 0.5]), tmp_path / "a.png", cache=cache,
+                              salt="code")
+    assert len(list(cache.glob("*.png"))) == 1
+    fig = _figure([0.0, 1.0, 0.5])
+
+    def no_render(*a, **k):
+        raise AssertionError("rendered again")
+
+    monkeypatch.setattr(fig, "savefig", no_render)
+    again = files.save_figure(fig, tmp_path / "b.png", cache=cache, salt="code")
+    assert again.read_bytes() == first.read_bytes()
+    # what the figure draws, or the code that drew it, changes its key
+    base = files.figure_digest(_figure([0.0, 1.0, 0.5]), 110, "code")
+    assert files.figure_digest(_figure([0.0, 1.0, 0.5]), 110, "code") == base
+    for other in (files.figure_digest(_figure([0.0, 1.0, 0.51]), 110, "code"),
+                  files.figure_digest(_figure([0.0, 1.0, 0.5], "u"), 110, "code"),
+                  files.figure_digest(_figure([0.0, 1.0, 0.5]), 100, "code"),
+                  files.figure_digest(_figure([0.0, 1.0, 0.5]), 110, "other code")):
+        assert other != base
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+
+
+def test_the_figure_cache_keeps_the_most_recent(tmp_path, monkeypatch):
+    monkeypatch.setattr(files, "FIGURE_CACHE_SIZE", 3)
+    cache = tmp_path / "figures"
+    for i in range(5):
+        files.save_figure(_figure([0.0, 1.0, float(i)]), tmp_path / f"{i}.png", cache=cache)
+    assert len(list(cache.glob("*.png"))) == 3

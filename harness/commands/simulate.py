@@ -5,12 +5,13 @@ from __future__ import annotations
 import argparse
 import functools
 import hashlib
+import os
 import shutil
 import tempfile
 from pathlib import Path
 
 from ..files import OutputSet, save_figure, write_csv, write_mat
-from ..fmu.build import default_fmu
+from ..fmu.build import cache_dir, default_fmu
 from ..results import SweepResult, format_table2, table2_rows
 from ..scenario import DEFAULT_SCENARIOS, embedded_scenarios
 from ..sweeps import run_scenario
@@ -144,6 +145,8 @@ def run(args: argparse.Namespace) -> int:
     import matplotlib  # deferred: matplotlib is heavy to import
 
     matplotlib.use("Agg")
+    if not args.no_plot:
+        import matplotlib.pyplot  # noqa: F401  imported once here, not in every forked worker
     # the scenarios are independent: each is run, and its figures drawn into a staging folder,
     # by a forked worker (all cores); nothing is written in --out before they all succeeded
     progress = not args.quiet and (len(scenarios) == 1 or bool(variants))
@@ -210,11 +213,30 @@ def _scenario_task(sc, stem: str, staging: Path, progress: bool, engine: str | N
     r = run_scenario(sc, progress=progress, engine=engine, workers=workers)
     names = []
     if plot:
-        names.append(save_figure(r.plot(), staging / f"{stem}.png").name)
+        # a figure that draws what one drawn before (same data, same code) is copied from
+        # the cache, not rendered again (harness.files.save_figure)
+        cache = Path(os.environ.get("DJL_FMU_FIGURES") or cache_dir() / "figures")
+        salt = _plot_code_digest()
+        names.append(save_figure(r.plot(), staging / f"{stem}.png", cache=cache,
+                                 salt=salt).name)
         rob = getattr(r, "robustness", None)
         if rob is not None:
-            names.append(save_figure(rob.plot(), staging / f"{stem}-robustness.png").name)
+            names.append(save_figure(rob.plot(), staging / f"{stem}-robustness.png",
+                                     cache=cache, salt=salt).name)
     return r, names
+
+
+_PLOT_SOURCES = ("simulation/plots.py", "results.py", "robustness.py", "files.py")
+"""The modules that draw simulate's figures (their digest is in each cached figure's key)."""
+
+
+@functools.lru_cache(maxsize=1)
+def _plot_code_digest() -> str:
+    root = Path(__file__).resolve().parents[1]
+    h = hashlib.sha256()
+    for name in _PLOT_SOURCES:
+        h.update((root / name).read_bytes())
+    return h.hexdigest()
 
 
 def _write_fmus(o: OutputSet) -> None:

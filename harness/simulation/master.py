@@ -527,13 +527,22 @@ def map_error_residuals(axis: Axis, z_axis: Axis, modes: Sequence[ScheduledMode 
     samples_per_step(h, float(z_axis.get("Te")), "Z axis")
     t_end = float(axis.get("t_start")) + float(axis.get("motion_time"))
     k_end = int(math.ceil(t_end / h - 1e-9))
-    X = axis.points(k_end, h)
     Z = z_axis.points(k_end, h, ("x", "v"))
     z, v_z = Z["x"], Z["v"]
     sm = scheduled(modes)
     zm = hermite_mid(z[:-1], v_z[:-1], z[1:], v_z[1:], h)
     f_mid = np.vstack([m.f_array(zm) for m in sm]) if k_end else np.zeros((len(sm), 0))
     f_end = [float(m.f_of_z(float(z[k_end]))) for m in sm]
+    if getattr(axis, "engine", None) == "fast" and k_end:
+        # the compiled plan steps the plant itself, every factor in one call (the same
+        # arithmetic as step_plant and free_amplitude below, without the samples)
+        out = np.empty(len(factors))
+        axis.planned.residuals(
+            int(round(h / Te)), k_end, h, np.ascontiguousarray(f_mid),
+            np.array([m.zeta for m in sm]), np.array([m.gain for m in sm]),
+            np.array(f_end), np.ascontiguousarray(factors, dtype=float), out)
+        return out
+    X = axis.points(k_end, h)
     inp = axis.plant_input(X, h)
     out = np.empty(len(factors))
     for i, c in enumerate(factors):

@@ -19,7 +19,8 @@ from ..plant import free_amplitude
 __all__ = ["COLORS", "PEAK_LABEL", "plot_runs"]
 
 COLORS = {"AL": "0.45", "JL": "tab:blue", "DJL": "tab:red", "JL-optimal": "tab:cyan",
-          "DJL-paper": "tab:pink", "DJL-optimal": "tab:green", "DJL-robust": "tab:purple"}
+          "DJL-paper": "tab:pink", "DJL-optimal": "tab:green", "DJL-robust": "tab:purple",
+          "recommended": "tab:orange"}
 
 PEAK_LABEL = "peak |ε| after the motion (sampled)"
 """Label of :attr:`~harness.evaluation.ProfileMetrics.residual_peak` wherever it is shown."""
