@@ -232,8 +232,11 @@ _PLOT_SOURCES = ("simulation/plots.py", "results.py", "robustness.py", "files.py
 
 @functools.lru_cache(maxsize=1)
 def _plot_code_digest() -> str:
+    """Digest of the plotting code and of matplotlib's version (a new one may draw otherwise)."""
+    import matplotlib  # deferred: matplotlib is heavy to import (pyplot is loaded by now)
+
     root = Path(__file__).resolve().parents[1]
-    h = hashlib.sha256()
+    h = hashlib.sha256(matplotlib.__version__.encode())
     for name in _PLOT_SOURCES:
         h.update((root / name).read_bytes())
     return h.hexdigest()
