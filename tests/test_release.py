@@ -205,7 +205,7 @@ def test_release_wheel_installs_and_simulates_in_a_fresh_venv_without_compiler(r
     prebuilt = Path(subprocess.run(
         [str(venv / "bin" / "python"), "-c",
          "from harness._resources import prebuilt_dir; print(prebuilt_dir())"],
-        capture_output=True, text=True, env=env, check=True).stdout.strip())
+        capture_output=True, text=True, env=env, cwd=tmp_path, check=True).stdout.strip())
     for v in (2, 3):
         assert ((out / f"JerkLimitedTrajectory-fmi{v}.fmu").read_bytes()
                 == (prebuilt / release.prebuilt_name(v)).read_bytes())
