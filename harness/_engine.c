@@ -19,6 +19,9 @@
  *
  * Arrays are exchanged through the buffer protocol (numpy arrays allocated by
  * the Python side, harness/engine.py): the module needs no numpy headers.
+ * Only CPython's limited API of 3.11 (Py_LIMITED_API, set by CMake for an abi3 wheel; the
+ * buffer protocol is in it from 3.11): the Plan type is made from a spec, no macros that
+ * reach into objects; the same code builds version-specific on 3.10.
  * No FMI code here.  Units: SI.
  */
 #define PY_SSIZE_T_CLEAN
@@ -49,7 +52,7 @@ typedef struct {
     int shifted;       /* t_start was not on the grid: moved to the next sample */
 } PlanObject;
 
-static PyTypeObject PlanType;
+static PyTypeObject *PlanType; /* created from plan_spec at import */
 
 static int get_double(PyObject *v, const char *key, double *out)
 {
@@ -97,21 +100,21 @@ static int get_int32(PyObject *v, const char *key, int32_t *out)
 
 static int get_array(PyObject *v, const char *key, double *out, int n)
 {
-    PyObject *seq = PySequence_Fast(v, "");
+    PyObject *seq = PySequence_Tuple(v);
     Py_ssize_t len, i;
     if (!seq) {
         PyErr_Clear();
         PyErr_Format(PyExc_TypeError, "parameter %s must be a sequence of numbers", key);
         return -1;
     }
-    len = PySequence_Fast_GET_SIZE(seq);
+    len = PyTuple_Size(seq);
     if (len > n) {
         Py_DECREF(seq);
         PyErr_Format(PyExc_ValueError, "parameter %s has %zd values, at most %d", key, len, n);
         return -1;
     }
     for (i = 0; i < len; i++) {
-        if (get_double(PySequence_Fast_GET_ITEM(seq, i), key, &out[i]) < 0) {
+        if (get_double(PyTuple_GetItem(seq, i), key, &out[i]) < 0) {
             Py_DECREF(seq);
             return -1;
         }
@@ -161,7 +164,7 @@ static int parse_params(PyObject *dict, djl_params *p, djl_shaper_params *sp, do
             PyErr_Format(PyExc_TypeError, "parameter names must be strings, got %R", key);
             return -1;
         }
-        k = PyUnicode_AsUTF8(key);
+        k = PyUnicode_AsUTF8AndSize(key, NULL);
         if (!k) return -1;
         for (i = 0; i < DJL_N_PARAMS && !pi; i++)
             if (!strcmp(k, djl_param_table[i].name)) pi = &djl_param_table[i];
@@ -268,7 +271,7 @@ static PyObject *engine_plan(PyObject *self, PyObject *args, PyObject *kwds)
     (void)self;
     if (!PyArg_ParseTupleAndKeywords(args, kwds, "O|d", kwlist, &dict, &start_time))
         return NULL;
-    obj = PyObject_New(PlanObject, &PlanType);
+    obj = PyObject_New(PlanObject, PlanType);
     if (!obj) return NULL;
     if (parse_params(dict, &p, &sp, &obj->t_start) < 0) {
         Py_DECREF(obj);
@@ -370,7 +373,7 @@ static PyObject *plan_eval(PlanObject *self, PyObject *args, PyObject *kwds)
     if (!PyArg_ParseTupleAndKeywords(args, kwds, "O|s", kwlist, &times, &side)) return NULL;
     if (strcmp(side, "right") != 0 && strcmp(side, "left") != 0) {
         PyErr_Format(PyExc_ValueError, "side must be \"right\" or \"left\", got %R",
-                     PyTuple_GET_ITEM(args, PyTuple_GET_SIZE(args) > 1 ? 1 : 0));
+                     PyTuple_GetItem(args, PyTuple_Size(args) > 1 ? 1 : 0));
         return NULL;
     }
     left = side[0] == 'l';
@@ -450,9 +453,9 @@ static PyObject *plan_breakpoints(PlanObject *self, PyObject *noargs)
         return NULL;
     }
     uniq = PyList_New(0);
-    for (k = 0; uniq && k < PyList_GET_SIZE(list); k++) {
-        PyObject *f = PyList_GET_ITEM(list, k);
-        if (k > 0 && PyFloat_AS_DOUBLE(f) == PyFloat_AS_DOUBLE(PyList_GET_ITEM(list, k - 1)))
+    for (k = 0; uniq && k < PyList_Size(list); k++) {
+        PyObject *f = PyList_GetItem(list, k);
+        if (k > 0 && PyFloat_AsDouble(f) == PyFloat_AsDouble(PyList_GetItem(list, k - 1)))
             continue;
         if (PyList_Append(uniq, f) < 0) Py_CLEAR(uniq);
     }
@@ -473,8 +476,12 @@ static PyObject *plan_get_shaper(PlanObject *self, void *c)
         return NULL;
     }
     for (i = 0; i < self->shaper.n; i++) {
-        PyTuple_SET_ITEM(A, i, PyFloat_FromDouble(self->shaper.A[i]));
-        PyTuple_SET_ITEM(t, i, PyFloat_FromDouble(self->shaper.t[i]));
+        if (PyTuple_SetItem(A, i, PyFloat_FromDouble(self->shaper.A[i])) < 0 ||
+            PyTuple_SetItem(t, i, PyFloat_FromDouble(self->shaper.t[i])) < 0) {
+            Py_DECREF(A);
+            Py_DECREF(t);
+            return NULL;
+        }
     }
     return Py_BuildValue("(NN)", A, t);
 }
@@ -1000,14 +1007,16 @@ static PyMethodDef plan_methods[] = {
     {NULL, NULL, 0, NULL},
 };
 
-static PyTypeObject PlanType = {
-    PyVarObject_HEAD_INIT(NULL, 0)
-    .tp_name = "harness._engine.Plan",
-    .tp_basicsize = sizeof(PlanObject),
-    .tp_flags = Py_TPFLAGS_DEFAULT,
-    .tp_doc = "A move planned by the generator core (create it with plan()).",
-    .tp_methods = plan_methods,
-    .tp_getset = plan_getset,
+/* A heap type from a spec (the limited API: the wheel is abi3 where the Python allows it). */
+static PyType_Slot plan_slots[] = {
+    {Py_tp_doc, (void *)"A move planned by the generator core (create it with plan())."},
+    {Py_tp_methods, plan_methods},
+    {Py_tp_getset, plan_getset},
+    {0, NULL},
+};
+
+static PyType_Spec plan_spec = {
+    "harness._engine.Plan", sizeof(PlanObject), 0, Py_TPFLAGS_DEFAULT, plan_slots,
 };
 
 /* motion_start(t_start, start_time, Te) -> float: the time of the generator sample at which
@@ -1454,9 +1463,13 @@ static struct PyModuleDef engine_module = {
 PyMODINIT_FUNC PyInit__engine(void)
 {
     PyObject *m;
-    if (PyType_Ready(&PlanType) < 0) return NULL;
     m = PyModule_Create(&engine_module);
     if (!m) return NULL;
+    PlanType = (PyTypeObject *)PyType_FromSpec(&plan_spec);
+    if (!PlanType) {
+        Py_DECREF(m);
+        return NULL;
+    }
     PlanError = PyErr_NewExceptionWithDoc(
         "harness._engine.PlanError",
         "The generator refused the parameters (the message is the FMU's). Attributes: status, "
@@ -1466,9 +1479,9 @@ PyMODINIT_FUNC PyInit__engine(void)
         Py_DECREF(m);
         return NULL;
     }
-    Py_INCREF(&PlanType);
-    if (PyModule_AddObject(m, "Plan", (PyObject *)&PlanType) < 0) {
-        Py_DECREF(&PlanType);
+    Py_INCREF((PyObject *)PlanType);
+    if (PyModule_AddObject(m, "Plan", (PyObject *)PlanType) < 0) {
+        Py_DECREF((PyObject *)PlanType);
         Py_DECREF(m);
         return NULL;
     }

@@ -26,6 +26,12 @@ def modeldesc_dir() -> Path:
     return _first_existing(_PKG / "_data" / "modeldesc", _PKG.parent / "modeldesc")
 
 
+def prebuilt_dir() -> Path | None:
+    """Folder of the prebuilt host FMUs a release wheel carries, ``None`` without them."""
+    d = _PKG / "_data" / "prebuilt"
+    return d if d.is_dir() else None
+
+
 def repo_root() -> Path | None:
     """Root of a source checkout, or ``None`` when running from an installed wheel."""
     root = _PKG.parent

@@ -38,7 +38,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
                 "harness.recommend", "harness.scoring",
                 "harness.peers", "harness.peers.*", "harness.claims", "harness.claims.*"),
     "commands": ("harness.commands", "harness.commands.*"),
-    "cli": ("harness.cli",),
+    "cli": ("harness.cli", "harness.release"),
 }
 """The layers, lowest first; a module may import only from its own layer or lower ones."""
 

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import hashlib
 import importlib.util
+import json
 import os
 import shutil
 import struct
@@ -31,7 +32,7 @@ from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
 
-from .._resources import fmu_src_dir, modeldesc_dir
+from .._resources import fmu_src_dir, modeldesc_dir, prebuilt_dir
 from ..errors import BuildError
 from . import codegen, spec
 from .artefacts import write_artefacts
@@ -619,15 +620,32 @@ def stamped_model_description(fmi_version: int) -> str:
     return text.replace(tool, f'{tool} generationDateAndTime="{generation_date()}"', 1)
 
 
+def _digested_files(fmi_version: int) -> list[Path]:
+    here = Path(__file__).resolve().parent
+    return [*source_files(fmi_version), model_description(fmi_version),
+            here / "build.py", here / "artefacts.py"]
+
+
 def _sources_digest(fmi_version: int, cc: str, extra_cflags: tuple[str, ...]) -> str:
     h = hashlib.sha256()
-    here = Path(__file__).resolve().parent
-    for f in [*source_files(fmi_version), model_description(fmi_version),
-              here / "build.py", here / "artefacts.py"]:
+    for f in _digested_files(fmi_version):
         h.update(f.name.encode())
         h.update(f.read_bytes())
     h.update(" ".join((cc, *CFLAGS, *PORTABLE_CFLAGS, *extra_cflags, *LDFLAGS)).encode())
     return h.hexdigest()[:16]
+
+
+def sources_digest(fmi_version: int) -> str:
+    """SHA-256 of what the FMU is built from: C sources, model description, build code.
+
+    The key of a prebuilt FMU (:func:`prebuilt_fmu`): the one a release wheel carries is
+    used only while the installed sources still give this digest.
+    """
+    h = hashlib.sha256()
+    for f in _digested_files(fmi_version):
+        h.update(f.name.encode())
+        h.update(f.read_bytes())
+    return h.hexdigest()
 
 
 def cache_dir() -> Path:
@@ -646,11 +664,63 @@ def default_fmu(fmi_version: int = 2, *, cc: str = "gcc",
     It carries this machine's binary only, compiled by ``cc`` (:data:`ZIG` for zig's
     clang): what the harness loads, built in about a second.  Builds are cached by a
     digest of the sources, model description, build code and flags, so editing the C
-    code rebuilds automatically.
+    code rebuilds automatically.  With the default compiler and flags, a release wheel's
+    prebuilt FMU (:func:`prebuilt_fmu`) is copied into the cache instead of compiling,
+    if it fits the installed sources: no C compiler is needed then.
     """
     digest = _sources_digest(fmi_version, cc, extra_cflags)
     path = cache_dir() / f"{spec.MODEL_IDENTIFIER}-fmi{fmi_version}-{digest}.fmu"
-    if not path.is_file():
-        check_compiler(cc)  # before creating anything
-        build_fmu(fmi_version, path, platforms="host", cc=cc, extra_cflags=extra_cflags)
+    if path.is_file():
+        return path
+    prebuilt = prebuilt_fmu(fmi_version) if (cc, extra_cflags) == ("gcc", ()) else None
+    if prebuilt is not None:  # a release wheel's: no compiler needed
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(path.name + f".tmp{os.getpid()}")
+        try:
+            shutil.copyfile(prebuilt, tmp)
+            os.replace(tmp, path)
+        finally:
+            tmp.unlink(missing_ok=True)
+        return path
+    check_compiler(cc)  # before creating anything
+    build_fmu(fmi_version, path, platforms="host", cc=cc, extra_cflags=extra_cflags)
     return path
+
+
+PREBUILT_MANIFEST = "manifest.json"
+"""File beside the prebuilt FMUs (:func:`harness._resources.prebuilt_dir`) that describes
+them: ``{"platform": ..., "fmus": {"2": {"file", "sources_digest", "sha256", "compiler"},
+"3": {...}}}`` (written by :func:`harness.release.stage_prebuilt`)."""
+
+
+def prebuilt_fmu(fmi_version: int, folder: Path | None = None) -> Path | None:
+    """Return the packaged prebuilt FMU of ``fmi_version`` if it fits, else None.
+
+    A release wheel carries this machine's FMUs (FMI 2 and 3, built with the wheel), so
+    that :func:`default_fmu` needs no C compiler; one is used only if it was built for this
+    platform from the installed sources (its :func:`sources_digest` matches) and its bytes
+    are the recorded ones (SHA-256).
+
+    Parameters
+    ----------
+    fmi_version : {2, 3}
+        FMI version of the FMU.
+    folder : pathlib.Path, optional
+        Folder of the prebuilt FMUs and their manifest; the package's by default
+        (:func:`harness._resources.prebuilt_dir`; a source checkout has none).
+    """
+    _check_version(fmi_version)
+    folder = prebuilt_dir() if folder is None else folder
+    if folder is None or not (folder / PREBUILT_MANIFEST).is_file():
+        return None
+    try:
+        manifest = json.loads((folder / PREBUILT_MANIFEST).read_text(encoding="utf-8"))
+        entry = manifest["fmus"][str(fmi_version)]
+        path = folder / entry["file"]
+        fits = (manifest["platform"] == host_platform()
+                and entry["sources_digest"] == sources_digest(fmi_version)
+                and path.is_file()
+                and hashlib.sha256(path.read_bytes()).hexdigest() == entry["sha256"])
+    except (OSError, ValueError, KeyError, TypeError, BuildError):
+        return None
+    return path if fits else None
