@@ -833,19 +833,19 @@ static PyObject *plan_adjoint_residuals(PlanObject *self, PyObject *args)
                 sizes[0] = nm * k_end;
                 sizes[1] = sizes[2] = sizes[3] = nm;
                 sizes[4] = n_pts;
-                if (!PyTuple_Check(fill) || PyTuple_GET_SIZE(fill) != 6) {
+                if (!PyTuple_Check(fill) || PyTuple_Size(fill) != 6) {
                     PyErr_SetString(PyExc_ValueError, "fill must be (h, f_nom, zeta, gain, "
                                     "f_end, factors)");
                     done = PY_SSIZE_T_MIN;
                     break;
                 }
-                fh = PyFloat_AsDouble(PyTuple_GET_ITEM(fill, 0));
+                fh = PyFloat_AsDouble(PyTuple_GetItem(fill, 0));
                 if (fh == -1.0 && PyErr_Occurred()) {
                     done = PY_SSIZE_T_MIN;
                     break;
                 }
                 for (j = 0; j < 5; j++) {
-                    if (get_in_buffer(PyTuple_GET_ITEM(fill, j + 1), &bfill[j], sizes[j],
+                    if (get_in_buffer(PyTuple_GetItem(fill, j + 1), &bfill[j], sizes[j],
                                       what[j]) < 0)
                         break;
                     nfill++;
@@ -941,7 +941,7 @@ static PyObject *plan_replan(PlanObject *self, PyObject *args)
         PyErr_SetString(PyExc_ValueError, "replan needs an unshaped plan");
         return NULL;
     }
-    obj = PyObject_New(PlanObject, &PlanType);
+    obj = PyObject_New(PlanObject, PlanType);
     if (!obj) return NULL;
     p = self->plan.p;
     for (i = 0; i < 4; i++) p.T_F[i] = T[i];

@@ -271,8 +271,11 @@ def test_cosimulate_on_fast_axes_refuses_a_step_off_the_grid():
         cosimulate(ax, az, [], 1.0, 1.5e-3)
 
 
-def test_engine_source_is_clean_under_strict_c99(tmp_path):
-    """harness/_engine.c compiles under -std=c99 -Wall -Wextra -Wpedantic -Werror."""
+@pytest.mark.parametrize("api", ["full", "limited"])
+def test_engine_source_is_clean_under_strict_c99(tmp_path, api):
+    """harness/_engine.c compiles under -std=c99 -Wall -Wextra -Wpedantic -Werror, with the
+    full C API and with the limited one of the abi3 wheels (Py_LIMITED_API 3.11: a macro
+    outside it, such as PyTuple_GET_ITEM, is then undeclared)."""
     if shutil.which("gcc") is None:
         pytest.skip("gcc not available")
     src = Path(__file__).resolve().parents[1] / "harness" / "_engine.c"
@@ -280,6 +283,7 @@ def test_engine_source_is_clean_under_strict_c99(tmp_path):
         pytest.skip("not a source checkout")
     cmd = ["gcc", "-std=c99", "-O2", "-fPIC", "-shared", "-Wall", "-Wextra", "-Wpedantic",
            "-Werror", "-fvisibility=hidden", f"-I{sysconfig.get_paths()['include']}",
+           *(["-DPy_LIMITED_API=0x030b0000"] if api == "limited" else []),
            f"-I{fmu_src_dir()}", str(src), *CORE, "-o",
            str(tmp_path / "_engine.so"), "-lm"]
     proc = subprocess.run(cmd, capture_output=True, text=True)
