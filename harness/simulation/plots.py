@@ -176,8 +176,9 @@ def plot_runs(runs: Mapping[str, Any], *, title: str = "", band: float | None = 
         tab.set_fontsize(8)
         tab.auto_set_column_width(list(range(-1, len(cols))))
         tab.scale(1.0, 1.25)
-        ax_m.text(0.0, 0.0, "\n".join(notes), transform=ax_m.transAxes, fontsize="x-small",
-                  va="bottom")
+        # under the table, which is centred: the block centred too, its lines left-aligned
+        ax_m.text(0.5, 0.0, "\n".join(notes), transform=ax_m.transAxes, fontsize="x-small",
+                  va="bottom", ha="center", multialignment="left")
     fig.suptitle(title, y=0.985)
     top = 0.875 if len(runs) + bool(band) > 3 else 0.9
     fig.subplots_adjust(left=0.08, right=0.98, top=top, bottom=0.05)
