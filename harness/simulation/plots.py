@@ -76,7 +76,7 @@ def plot_runs(runs: Mapping[str, Any], *, title: str = "", band: float | None = 
     fig = plt.figure(figsize=(13, 10.5))
     outer = fig.add_gridspec(1, 2, width_ratios=(1, 1.25), wspace=0.22)
     # left: x, v, a, j over a shared t axis (labelled), then the table of numbers below it
-    gl = outer[0, 0].subgridspec(2, 1, height_ratios=(4.0, 1.25), hspace=0.2)
+    gl = outer[0, 0].subgridspec(2, 1, height_ratios=(4.0, 1.4), hspace=0.2)
     gx = gl[0].subgridspec(4, 1, hspace=0.14)
     gr = outer[0, 1].subgridspec(5, 1, hspace=0.14)
     left = [fig.add_subplot(gx[0])]
@@ -173,13 +173,13 @@ def plot_runs(runs: Mapping[str, Any], *, title: str = "", band: float | None = 
         tab = ax_m.table(cellText=cells, colLabels=cols, rowLabels=labels, cellLoc="center",
                          loc="upper center")
         tab.auto_set_font_size(False)
-        tab.set_fontsize(8)
+        tab.set_fontsize(8 if len(cols) <= 4 else 7 if len(cols) <= 6 else 6)  # fits the column
         tab.auto_set_column_width(list(range(-1, len(cols))))
         tab.scale(1.0, 1.25)
         # under the table, which is centred: the block centred too, its lines left-aligned
         ax_m.text(0.5, 0.0, "\n".join(notes), transform=ax_m.transAxes, fontsize="x-small",
                   va="bottom", ha="center", multialignment="left")
     fig.suptitle(title, y=0.985)
-    top = 0.875 if len(runs) + bool(band) > 3 else 0.9
+    top = 0.92 - 0.022 * math.ceil(len(handles) / 3)  # below the legend's rows
     fig.subplots_adjust(left=0.08, right=0.98, top=top, bottom=0.05)
     return fig
