@@ -55,6 +55,7 @@ from typing import Any
 import numpy as np
 
 from .evaluation import ProfileMetrics, profile_metrics
+from .figures import legend_above_data
 from .fmu.runner import LogRecord
 from .metrics import ZERO_BAND_NOTE
 from .plant import ScheduledMode
@@ -707,14 +708,11 @@ class OnlineResult:
             right[1].plot(tu.instants, [1.0 / p for p in tu.periods], "x", color="tab:red",
                           label=f"offline {self.offline_profile}: tuned at the stage starts")
         right[1].set_ylabel("f [Hz]")
-        right[1].legend(fontsize="x-small", loc="upper right")
         right[2].set_ylabel("ε [mm]")
         right[2].axhspan(-self.band * 1e3, self.band * 1e3, color="gold", alpha=0.35, lw=0)
-        right[2].legend(fontsize="x-small", loc="upper right")
         right[3].set_ylabel("z [m]")
         for ax, lab in zip(left, ("x [m]", "v [m/s]", "a [m/s²]", "j [m/s³]"), strict=True):
             ax.set_ylabel(lab)
-        left[0].legend(fontsize="small", loc="lower right")
         for ax in axes.ravel():
             ax.grid(True, alpha=0.3)
         t_end = max(self.online.t_end, self.offline.t_end)
@@ -724,6 +722,10 @@ class OnlineResult:
         fig.suptitle(title or f"{self.scenario.name}: DJL with f_mode online (jerk_source = "
                               f"{self.jerk_source}) vs offline-tuned {self.offline_profile}")
         fig.tight_layout()
+        # the legends in headroom above the curves: off the data
+        legend_above_data(right[1], fontsize="x-small")
+        legend_above_data(right[2], fontsize="x-small")
+        legend_above_data(left[0], loc="upper left")
         return fig
 
 

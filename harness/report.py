@@ -19,10 +19,12 @@ from __future__ import annotations
 
 import base64
 import datetime as _dt
+import functools
 import html
 import io
 import os
 import platform
+import re
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -33,7 +35,7 @@ import numpy as np
 
 from . import __version__
 from .claims import ClaimResult, Settings
-from .claims.formulas import DERIVATIONS
+from .claims.formulas import DERIVATIONS, paper_ref
 from .claims.registry import run_claims
 from .files import OutputSet
 from .peers.compare import compare_scenario
@@ -101,6 +103,69 @@ def _e(text: object) -> str:
     return html.escape(str(text))
 
 
+_SVG_DROP = re.compile(r"<\?xml.*?\?>|<!DOCTYPE.*?>|<metadata>.*?</metadata>|<!--.*?-->"
+                       r'|<g id="patch_1">.*?</g>|\s(?:id="(?:figure|patch|text)_\d+")'
+                       r'|<style type="text/css">.*?</style>',
+                       re.DOTALL)
+
+
+@functools.lru_cache(maxsize=256)
+def math_svg(tex: str) -> str:
+    """Render a TeX formula with matplotlib's mathtext as an inline SVG element.
+
+    Works offline (no MathJax, no web font): the glyphs are SVG paths.  The XML
+    prologue, the namespace declarations and metadata (which name URLs), the
+    comments (which repeat the TeX), the page-wide style and the white background
+    are left out; the element sits on the text's baseline.
+
+    Parameters
+    ----------
+    tex : str
+        The formula, without the ``$`` delimiters (mathtext's TeX subset).
+
+    Returns
+    -------
+    str
+        ``<svg ...>...</svg>``.
+
+    Raises
+    ------
+    ValueError
+        If mathtext cannot parse the formula.
+    """
+    from matplotlib import mathtext  # deferred: matplotlib is heavy to import
+    from matplotlib.font_manager import FontProperties  # deferred: matplotlib is heavy
+
+    buf = io.BytesIO()
+    depth = mathtext.math_to_image(f"${tex}$", buf, prop=FontProperties(size=11),
+                                   format="svg")
+    svg = _SVG_DROP.sub("", buf.getvalue().decode("utf-8")).strip()
+    style = f'style="vertical-align: -{float(depth or 0.0):.1f}pt" class="math" role="img"'
+    # inline in HTML5: no namespace declarations needed, SVG 2 href (no URL in the page)
+    svg = re.sub(r'\sxmlns(?::xlink)?="[^"]*"', "", svg).replace("xlink:href=", "href=")
+    return svg.replace("<svg ", f"<svg {style} ", 1)
+
+
+def rich(text: str) -> str:
+    """Escape ``text`` for HTML, rendering each ``$...$`` formula as inline SVG (:func:`math_svg`).
+
+    A formula mathtext cannot parse is shown as escaped code, never dropped.
+    """
+    parts = text.split("$")
+    if len(parts) % 2 == 0:  # an unpaired $: plain text
+        return _e(text)
+    out = []
+    for k, part in enumerate(parts):
+        if k % 2 == 0:
+            out.append(_e(part))
+            continue
+        try:
+            out.append(math_svg(part))
+        except ValueError:
+            out.append(f"<code>{_e(part)}</code>")
+    return "".join(out)
+
+
 def _figure_png(fig) -> bytes:
     import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
@@ -139,9 +204,9 @@ def _claim_section(r: ClaimResult, img_src: Callable[[int, int, bytes], str]) ->
                f'paper statements {sum(c.passed for c in n_paper)}/{len(n_paper)} confirmed '
                f'&middot; {r.elapsed:.1f} s</p>')
     if r.statement:
-        out.append(f"<h3>The paper says</h3><blockquote>{_e(r.statement)}</blockquote>")
+        out.append(f"<h3>The paper says</h3><blockquote>{rich(r.statement)}</blockquote>")
     if r.method:
-        out.append(f"<h3>How both sides are computed</h3><p>{_e(r.method)}</p>")
+        out.append(f"<h3>How both sides are computed</h3><p>{rich(r.method)}</p>")
     if r.error:
         out.append('<h3 class="FAILED">The computation raised: claim FAILED</h3>'
                    f"<pre>{_e(r.error)}</pre>")
@@ -169,7 +234,7 @@ def _claim_section(r: ClaimResult, img_src: Callable[[int, int, bytes], str]) ->
         out.append("</table>")
     if r.derivations:
         out.append("<h3>Equations re-derived for this claim</h3><ul>"
-                   + "".join(f"<li>{_e(d)}</li>" for d in r.derivations) + "</ul>")
+                   + "".join(f"<li>{rich(d)}</li>" for d in r.derivations) + "</ul>")
     return "\n".join(out)
 
 
@@ -300,7 +365,8 @@ def render_html(results: Sequence[ClaimResult], *, settings: Settings, elapsed: 
     if failed or errors:
         body.append("<h3>What failed</h3><ul>" + errors + failed_html + "</ul>")
     body.append("<h3>Equations of the papers re-derived (garbled or wrong in the text)</h3><ul>"
-                + "".join(f"<li><b>{_e(k)}</b>: {_e(v)}</li>" for k, v in DERIVATIONS.items())
+                + "".join(f"<li><b>{_e(paper_ref(k))}</b>: {rich(v)}</li>"
+                          for k, v in DERIVATIONS.items())
                 + "</ul>")
     if extra_sections:
         body.append("<p>Also in this report: <a href='#peers'>peers side by side</a>.</p>")

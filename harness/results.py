@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import math
+import textwrap
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -759,7 +760,7 @@ class SweepResult(TableMixin):
         import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         cases = self.distinct()
-        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(13, 5.5))
+        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(15, 7.5), width_ratios=(1, 1.55))
         jl = np.array([c.metric("JL", "residual") for c in cases]) * 1e3
         djl = np.array([c.metric("DJL", "residual") for c in cases]) * 1e3
         dz = np.array([c.scenario.z.distance for c in cases])
@@ -785,14 +786,21 @@ class SweepResult(TableMixin):
         for i, (k, lab, col) in enumerate(bars):
             ax2.bar(idx - 0.4 + wb * (i + 0.5), ch[k], width=wb, color=col, label=lab)
         ax2.axhline(0.0, color="k", lw=0.8)
-        ax2.set_xlabel("distinct move (d, dz, v_max: see the CSV; duplicates counted once)")
+        # every bar group labelled with its move (d [m], dz [m], v_max [m/s])
+        ax2.set_xticks(idx, [self.case_label(c).replace("v=", "v_max=") for c in cases],
+                       rotation=90, fontsize=6.5 if len(cases) > 30 else "small")
+        ax2.set_xlim(-0.7, len(cases) - 0.3)
+        ax2.set_xlabel("distinct move: d, dz [m], v_max [m/s] (duplicates counted once)")
         ax2.set_ylabel("DJL compared with JL [%]")
-        ax2.grid(True, alpha=0.3)
-        ax2.legend(fontsize="small")
+        ax2.grid(True, axis="y", alpha=0.3)
+        # the legend above the bars: off the data
+        ax2.legend(fontsize="small", loc="lower center", bbox_to_anchor=(0.5, 1.0),
+                   ncol=2, frameon=False)
         st = self.stats()
-        fig.suptitle(title or (f"Sweep {self.scenario.name}: {self.merged_note()}\nDJL vs JL "
-                               f"residual {st['residual'].mean:+.1f} % on average, settling time "
-                               f"{st['settling'].mean:+.1f} % ({self.band_label})"),
+        head = textwrap.fill(f"Sweep {self.scenario.name}: {self.merged_note()}", width=170)
+        fig.suptitle(title or (f"{head}\nDJL vs JL residual {st['residual'].mean:+.1f} % on "
+                               f"average, settling time {st['settling'].mean:+.1f} % "
+                               f"({self.band_label})"),
                      fontsize="medium")
         # fixed margins (for these labels at this size): no layout pass before the drawing
         fig.subplots_adjust(left=0.07, right=0.985, top=0.87, bottom=0.1, wspace=0.25)

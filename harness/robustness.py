@@ -183,7 +183,7 @@ class RobustnessResult:
         """
         import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
-        fig, ax = plt.subplots(figsize=(9, 5.5))
+        fig, ax = plt.subplots(figsize=(9, 6.3))
         x = 100.0 * self.errors
         ax.axvspan(-100 * span, 100 * span, color="0.88", lw=0,
                    label=f"+/-{100 * span:g} % (worst case)")
@@ -201,7 +201,9 @@ class RobustnessResult:
                       "on the nominal map")
         ax.set_ylabel("residual vibration [mm]\n(free-oscillation amplitude at the end)")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize="small")
+        # below the axes: off the data
+        ax.legend(fontsize="small", loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2,
+                  frameon=False)
         name = self.scenario.name if self.scenario is not None else ""
         ax.set_title(title or f"{name}: robustness to a map error, {self.label}",
                      fontsize="medium")

@@ -95,7 +95,7 @@ import difflib
 import itertools
 import math
 import sys
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -301,6 +301,77 @@ class MapSpec:
     v_max: tuple[float, ...] | None = None
 
 
+def _check_max_moves(max_moves: object) -> None:
+    if isinstance(max_moves, bool) or not isinstance(max_moves, int) or max_moves < 1:
+        raise ValueError(f"max_moves must be an integer >= 1, got {max_moves!r}")
+
+
+# badly approximable fractions (golden, silver, sqrt 3 - 1, (sqrt 13 - 3) / 2): a step of
+# m * f visits the m values of an axis evenly, even for a few choices
+_STEPS = ((math.sqrt(5.0) - 1.0) / 2.0, math.sqrt(2.0) - 1.0, math.sqrt(3.0) - 1.0,
+          (math.sqrt(13.0) - 3.0) / 2.0)
+
+
+def _coprime_step(m: int, fraction: float) -> int:
+    """Return the integer nearest ``m * fraction`` that is prime to ``m`` (0 for m = 1)."""
+    if m == 1:
+        return 0
+    near = sorted(range(1, m), key=lambda s: (abs(s - m * fraction), s))
+    return next(s for s in near if math.gcd(s, m) == 1)
+
+
+def spread_indices(sizes: Sequence[int], count: int) -> list[tuple[int, ...]]:
+    """Pick ``count`` cells of a grid of shape ``sizes``, spread evenly over every axis.
+
+    The first axis' values share ``count`` as evenly as possible (the extra
+    ones to evenly spaced values); each value's share is split the same way
+    over the next axis, and so on.  Where an axis gets fewer cells than it has
+    values, they are evenly spaced from an offset that moves on at each
+    choice on that axis by a step of its own (prime to the axis' size, near
+    a badly approximable fraction of it: golden ratio, silver ratio, ...), so
+    that the sub-grids take every offset in turn and the axes do not follow
+    each other.  Deterministic.
+
+    Parameters
+    ----------
+    sizes : sequence of int
+        Number of values of each axis (>= 1).
+    count : int
+        Cells to pick, ``1 <= count <= prod(sizes)``.
+
+    Returns
+    -------
+    list of tuple of int
+        ``count`` distinct multi-indices, in lexicographic order.
+    """
+    if not 1 <= count <= math.prod(sizes):
+        raise ValueError(f"count must be in 1..{math.prod(sizes)}, got {count}")
+    # on each axis, the offset of the evenly spaced choices moves on by a step of its
+    # own (about m * _STEPS[axis]; prime to m: every offset in turn)
+    cursor = [0] * len(sizes)
+    steps = [_coprime_step(m, _STEPS[k % len(_STEPS)]) for k, m in enumerate(sizes)]
+
+    def pick(axis: int, k: int, m: int) -> list[int]:
+        # k of m values (k <= m), evenly spaced from the axis' current offset
+        c = cursor[axis]
+        cursor[axis] = (c + steps[axis]) % m
+        return [(c + i * m // k) % m for i in range(k)]
+
+    def split(axis: int, k: int) -> list[tuple[int, ...]]:
+        if axis == len(sizes):
+            return [()]
+        m = sizes[axis]
+        if k < m:
+            shares = dict.fromkeys(pick(axis, k, m), 1)
+        else:
+            base, extra = divmod(k, m)
+            plus = set(pick(axis, extra, m)) if extra else set()
+            shares = {i: base + (i in plus) for i in range(m)}
+        return [(i, *sub) for i in sorted(shares) for sub in split(axis + 1, shares[i])]
+
+    return split(0, count)
+
+
 @dataclass(frozen=True)
 class Scenario:
     """A checked scenario.
@@ -360,19 +431,50 @@ class Scenario:
         """Number of moves of the map's full grid (1 without a ``[map]`` table)."""
         return math.prod(len(a) for a in self.map_axes())
 
-    def map_points(self, max_moves: int | None = None
+    def map_points(self, max_moves: int | None = None, *, spread: bool = False
                    ) -> list[tuple[float, float, float, float]]:
         """Return the moves of the map, ``(z0, z_distance, distance, v_max)``, in grid order.
 
         Parameters
         ----------
         max_moves : int, optional
-            Keep only the first ``max_moves`` moves (>= 1).
+            Keep only ``max_moves`` moves (>= 1): the first ones of the grid, or
+            with ``spread`` the moves of :meth:`map_indices`.
+        spread : bool
+            Sample ``max_moves`` moves across the whole grid (``djl-fmu map``)
+            instead of taking the first ones (``djl-fmu tune``).
 
         Returns
         -------
         list of tuple of float
-            The cartesian product of :meth:`map_axes`, ``v_max`` varying fastest.
+            The cartesian product of :meth:`map_axes`, ``v_max`` varying fastest
+            (a subset of it, still in grid order, with ``max_moves``).
+
+        Raises
+        ------
+        ValueError
+            If ``max_moves`` is not an integer >= 1.
+        """
+        grid = list(itertools.product(*self.map_axes()))
+        return [grid[i] for i in self.map_indices(max_moves, spread=spread)]
+
+    def map_indices(self, max_moves: int | None = None, *, spread: bool = True) -> list[int]:
+        """Return the grid indices (``v_max`` fastest) of the moves :meth:`map_points` keeps.
+
+        Parameters
+        ----------
+        max_moves : int, optional
+            How many moves (>= 1; default: every move of the grid).
+        spread : bool
+            True: ``max_moves`` moves spread evenly over the whole grid, by
+            :func:`spread_indices`: every (z0, v_max) pair, a panel of the heat
+            maps, gets its share, then Z travel and move length within it;
+            deterministic. False: the first ``max_moves`` moves.
+
+        Returns
+        -------
+        list of int
+            Increasing indices into the grid.
 
         Raises
         ------
@@ -380,11 +482,18 @@ class Scenario:
             If ``max_moves`` is not an integer >= 1.
         """
         n = self.map_size
-        if max_moves is not None:
-            if isinstance(max_moves, bool) or not isinstance(max_moves, int) or max_moves < 1:
-                raise ValueError(f"max_moves must be an integer >= 1, got {max_moves!r}")
-            n = min(n, max_moves)
-        return list(itertools.islice(itertools.product(*self.map_axes()), n))
+        if max_moves is None or max_moves >= n:
+            if max_moves is not None:
+                _check_max_moves(max_moves)
+            return list(range(n))
+        _check_max_moves(max_moves)
+        if not spread:
+            return list(range(max_moves))
+        n_z0, n_dz, n_d, n_v = (len(a) for a in self.map_axes())
+        # the heat maps' panels first (z0 rows, v_max columns), then dz and d within them
+        picked = spread_indices((n_z0, n_v, n_dz, n_d), max_moves)
+        return sorted(((i_z0 * n_dz + i_dz) * n_d + i_d) * n_v + i_v
+                      for i_z0, i_v, i_dz, i_d in picked)
 
     def map_case(self, z0: float, z_distance: float, distance: float, v_max: float
                  ) -> Scenario:

@@ -31,6 +31,7 @@ Examples
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import socket
@@ -235,7 +236,8 @@ def run_workspace_map(scenario: Scenario | str | Path, *, engine: str = "fast",
     scheduler : str, optional
         Address of a Dask scheduler (``tcp://host:8786``): run on its workers.
     max_moves : int, optional
-        Run only the first ``max_moves`` moves of the grid.
+        Run only ``max_moves`` moves, spread evenly over the whole grid
+        (:meth:`~harness.scenario.Scenario.map_indices`); deterministic.
     progress : bool
         Show a tqdm progress bar (only when stderr is a terminal).
     executor : Executor, optional
@@ -264,21 +266,23 @@ def run_workspace_map(scenario: Scenario | str | Path, *, engine: str = "fast",
         raise ScenarioError(sc.source, "map", None, "the scenario has no [map] table (the "
                             "embedded X and Y have one; format: docs/map.md)")
     check_engine(engine, sc)
-    points = sc.map_points(max_moves)
+    indices = sc.map_indices(max_moves)
+    grid = list(itertools.product(*sc.map_axes()))
+    points = [grid[i] for i in indices]
     if batch is not None and (isinstance(batch, bool) or not isinstance(batch, int)
                               or batch < 1):
         raise ValueError(f"batch must be an integer >= 1, got {batch!r}")
     bs = batch or batch_size(len(points))
     if executor is not None:
-        return _run_on(sc, engine, points, bs, executor, executor_workers(executor),
+        return _run_on(sc, engine, points, indices, bs, executor, executor_workers(executor),
                        describe_executor(executor, None), progress)
     with make_executor(workers, scheduler) as ex:
-        return _run_on(sc, engine, points, bs, ex, executor_workers(ex),
+        return _run_on(sc, engine, points, indices, bs, ex, executor_workers(ex),
                        describe_executor(ex, scheduler), progress)
 
 
-def _run_on(sc: Scenario, engine: str, points: list[Point], bs: int, ex: Executor,
-            n_workers: int, where: str, progress: bool) -> WorkspaceMap:
+def _run_on(sc: Scenario, engine: str, points: list[Point], indices: list[int], bs: int,
+            ex: Executor, n_workers: int, where: str, progress: bool) -> WorkspaceMap:
     batches, wall = run_batches(
         ex, run_batch, (sc, engine), points, bs, error=WorkspaceMapError, passthrough=MoveError,
         progress=_progress_bar(len(points), progress, f"map {sc.name}"),
@@ -286,10 +290,13 @@ def _run_on(sc: Scenario, engine: str, points: list[Point], bs: int, ex: Executo
     rows = [r for br in batches for r in br.rows]
     keys = [k for br in batches for k in br.keys]
     busy = sum(br.busy_time for br in batches)
+    for i, move in zip(indices, rows, strict=True):
+        for r in move:
+            r["move_index"] = i  # the move's index in the whole grid
     _mark_duplicates(rows, keys)
     return WorkspaceMap(sc, points, rows, engine=engine, workers=n_workers, wall_time=wall,
-                     busy_time=busy, batch=bs, executor=where,
-                     worker_ids=sorted({br.worker for br in batches}))
+                        busy_time=busy, batch=bs, executor=where,
+                        worker_ids=sorted({br.worker for br in batches}), indices=indices)
 
 
 def _mark_duplicates(move_rows: list[Any], keys: list[Any]) -> None:
@@ -325,10 +332,10 @@ class WorkspaceMap:
         The map's scenario.
     points : list of tuple of float
         The moves run, ``(z0, z_distance, distance, v_max)``, in grid order
-        (the first ``len(points)`` moves of the grid).
+        (every move of the grid, or those ``max_moves`` picked across it).
     move_rows : list of list of dict
         For each move, one CSV row per profile (the columns of ``djl-fmu
-        simulate``'s sweep CSV, plus ``move_index``).
+        simulate``'s sweep CSV, plus ``move_index``: its index in the grid).
     engine : str
         Evaluation engine.
     workers : int
@@ -343,6 +350,9 @@ class WorkspaceMap:
         Where it ran.
     worker_ids : list of str
         ``host:pid`` of the workers that ran batches.
+    indices : list of int, optional
+        Index of each move of ``points`` in the whole grid (``v_max`` fastest);
+        default: the first ``len(points)``.
     """
 
     scenario: Scenario
@@ -355,6 +365,7 @@ class WorkspaceMap:
     batch: int = 1
     executor: str = ""
     worker_ids: list[str] = field(default_factory=list)
+    indices: list[int] | None = None
 
     # ------------------------------------------------------------ numbers
 
@@ -432,7 +443,8 @@ class WorkspaceMap:
         """
         shape = tuple(len(a) for a in self.scenario.map_axes())
         arr = np.full(math.prod(shape), np.nan)
-        arr[:self.n_moves] = self.values(column, profile)
+        idx = self.indices if self.indices is not None else list(range(self.n_moves))
+        arr[idx] = self.values(column, profile)
         return arr.reshape(shape)
 
     # -------------------------------------------------------------- table
@@ -539,7 +551,7 @@ class WorkspaceMap:
         from matplotlib import colors  # deferred: matplotlib is heavy to import
 
         z0s, dzs, ds, vs = (np.asarray(a, dtype=float) for a in self.scenario.map_axes())
-        # slices with data only (a map cut by max_moves fills the first z0 slices)
+        # slices with data only (a small map may leave whole z0 or v_max slices empty)
         has = np.isfinite(arr)
         z_ok = [i for i in range(len(z0s)) if has[i].any()] or list(range(len(z0s)))
         v_ok = [j for j in range(len(vs)) if has[..., j].any()] or list(range(len(vs)))

@@ -24,7 +24,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
         "harness", "harness._resources", "harness.errors", "harness.files",
         "harness.executors", "harness.plant", "harness.modemap", "harness.metrics",
         "harness.uncertainty", "harness._engine", "harness.compiled", "harness.scenarios",
-        "harness.shaper_designs", "harness.tables",
+        "harness.shaper_designs", "harness.tables", "harness.figures",
         "harness.fmu",
         "harness.fmu.*",
     ),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import csv
 import dataclasses
 import math
@@ -111,14 +112,49 @@ def test_grid_order_count_and_cases():
     assert c.simulation == sc.simulation
 
 
-def test_max_moves_takes_the_first_moves():
+def test_max_moves_takes_the_first_moves_unless_spread():
     sc = _scenario()
     assert sc.map_points(5) == sc.map_points()[:5]
     assert sc.map_points(1000) == sc.map_points()
+    assert sc.map_points(1000, spread=True) == sc.map_points()
     assert [c.name for c in sc.map_cases(3)] == [c.name for c in sc.map_cases()[:3]]
+    assert sc.map_indices(5, spread=False) == [0, 1, 2, 3, 4]
+    pts = sc.map_points()
+    assert sc.map_points(5, spread=True) == [pts[k] for k in sc.map_indices(5)]
     for bad in (0, -1, 2.5, True):
         with pytest.raises(ValueError, match="max_moves"):
             sc.map_points(bad)
+        with pytest.raises(ValueError, match="max_moves"):
+            sc.map_indices(bad)
+
+
+@pytest.mark.parametrize("n", [1, 3, 7, 12, 20, 50, 200, 1000, 9999])
+def test_spread_moves_cover_the_whole_grid(n):
+    """--max-moves N on X's 5 x 20 x 25 x 4 grid: N distinct moves, in grid order, the same
+    every time, shared evenly among the heat maps' panels (z0 rows, v_max columns) and
+    spread over Z travel and move length, not the first rows of the grid."""
+    sc = load_scenario("X")
+    sizes = [len(a) for a in sc.map_axes()]
+    idx = sc.map_indices(n)
+    assert len(idx) == len(set(idx)) == n and idx == sorted(idx)
+    assert idx == sc.map_indices(n)  # deterministic
+    multi = np.array(np.unravel_index(idx, sizes)).T  # (i_z0, i_dz, i_d, i_v), v_max fastest
+    for axis, size in enumerate(sizes):
+        counts = np.bincount(multi[:, axis], minlength=size)
+        if n >= size:  # every value gets its share, give or take one
+            assert counts.min() >= n // size - 1 and counts.max() <= -(-n // size) + 1
+        else:  # distinct values, across the range (not the first ones)
+            assert counts.max() <= 1 or axis >= 2
+    panels = np.bincount(multi[:, 0] * sizes[3] + multi[:, 3], minlength=sizes[0] * sizes[3])
+    if n >= panels.size:
+        assert panels.max() - panels.min() <= 1  # every panel of the heat maps filled evenly
+    else:
+        assert panels.max() == 1
+    if n >= 12:  # the moves reach both ends of every axis' range
+        for axis, size in enumerate(sizes):
+            lo, hi = multi[:, axis].min(), multi[:, axis].max()
+            assert lo <= size // 4 and hi >= size - 1 - size // 4
+    assert sc.map_indices(n, spread=False) == list(range(n))
 
 
 def test_missing_lists_take_the_scenario_values():
@@ -283,17 +319,36 @@ def test_identical_on_a_process_pool(serial, tmp_path):
     # run_workspace_map's own pool, with another batch size and worker count
     own = run_workspace_map(sc, engine=ENGINE, workers=2, batch=5, max_moves=9)
     assert own.workers == 2
-    _assert_rows_identical(own.rows(), serial.rows()[:27])
+    _assert_rows_identical(own.rows(), _rows_of(serial, sc.map_indices(9)))
 
 
-def test_max_moves_runs_the_first_moves(serial):
+def _rows_of(res, indices):
+    """The rows of the given grid moves of a whole map, duplicates marked among them only."""
+    out = [copy.deepcopy(res.move_rows[k]) for k in indices]
+    firsts: dict[str, str] = {}
+    for rows in out:
+        orig = rows[0]["duplicate_of"]
+        key = orig or rows[0]["scenario"]
+        dup = firsts.setdefault(key, rows[0]["scenario"])
+        for r in rows:
+            r["duplicate_of"] = dup if dup != rows[0]["scenario"] else ""
+    return [r for rows in out for r in rows]
+
+
+def test_max_moves_runs_moves_across_the_grid(serial):
     from harness.workspace import run_workspace_map
 
-    part = run_workspace_map(_scenario(), engine=ENGINE, workers=1, max_moves=5)
-    assert part.n_moves == 5 and part.points == _scenario().map_points()[:5]
-    _assert_rows_identical(part.rows(), serial.rows()[:15])
-    g = part.grid("residual_m", "AL")
-    assert np.isfinite(g.ravel()[:5]).all() and np.isnan(g.ravel()[5:]).all()
+    sc = _scenario()
+    part = run_workspace_map(sc, engine=ENGINE, workers=1, max_moves=5)
+    idx = sc.map_indices(5)
+    assert part.n_moves == 5 and part.points == [sc.map_points()[k] for k in idx]
+    assert part.indices == idx and idx != [0, 1, 2, 3, 4]
+    assert [rows[0]["move_index"] for rows in part.move_rows] == idx
+    _assert_rows_identical(part.rows(), _rows_of(serial, idx))
+    g = part.grid("residual_m", "AL").ravel()
+    assert np.isfinite(g[idx]).all()
+    assert np.isnan(np.delete(g, idx)).all()
+    np.testing.assert_array_equal(g[idx], serial.grid("residual_m", "AL").ravel()[idx])
 
 
 @pytest.mark.slow
@@ -460,8 +515,13 @@ def test_cli_run_writes_csv_heat_maps_and_summary(tmp_path, capsys, serial):
     rows = list(csv.DictReader((out / "map-test-map.csv").open()))
     assert len(rows) == 18
     assert list(rows[0]) == list(serial.rows()[0])
-    assert [int(r["move_index"]) for r in rows] == [k for k in range(6) for _ in range(3)]
-    for r, ref in zip(rows, serial.rows()[:18], strict=True):
+    # six moves across the 16-move grid (every z0 and v_max), numbered in the whole grid
+    picked = _scenario().map_indices(6)
+    assert picked == [0, 1, 6, 9, 14, 15]  # 3 moves per z0, 3 per v_max, both dz, both d
+    multi = np.array(np.unravel_index(picked, (2, 2, 2, 2))).T
+    assert [np.bincount(multi[:, a]).tolist() for a in range(4)] == [[3, 3]] * 4
+    assert [int(r["move_index"]) for r in rows] == [k for k in picked for _ in range(3)]
+    for r, ref in zip(rows, _rows_of(serial, picked), strict=True):
         assert float(r["residual_m"]) == pytest.approx(ref["residual_m"], rel=1e-9)
         assert float(r["settling_time_s"]) == pytest.approx(ref["settling_time_s"], rel=1e-9)
         assert float(r["motion_time_s"]) == pytest.approx(ref["motion_time_s"], rel=1e-9)

@@ -51,6 +51,50 @@ def test_report_is_self_contained(tmp_path, fmu2):
         summary.results[0].checks) + 1
 
 
+def _outside_svg(text: str) -> str:
+    """The HTML with the inline SVG elements (the rendered equations) taken out."""
+    return re.sub(r"<svg\b.*?</svg>", "", text, flags=re.DOTALL)
+
+
+def test_equations_rendered_offline_as_svg(tmp_path, fmu2):
+    """Every $...$ formula of the statements is an inline SVG (matplotlib mathtext): no raw
+    TeX left where an equation is, no MathJax, no URL in the page; the papers are named,
+    not tagged with their file numbers ("000 eq. (18)")."""
+    from harness.claims import moving_average, residual, spectra, vibration_filters
+    from harness.claims.formulas import DERIVATIONS
+    from harness.report import math_svg, render_html, rich
+
+    statements = [m.STATEMENT for m in (moving_average, residual, spectra, vibration_filters)]
+    formulas = [f for st in statements for f in st.split("$")[1::2]]
+    assert len(formulas) >= 20
+    for f in formulas:  # each one parses (no fallback to code)
+        svg = math_svg(f)
+        assert svg.startswith("<svg ") and svg.endswith("</svg>") and "<path" in svg
+    for st in statements:
+        html = rich(st)
+        assert html.count("<svg ") == st.count("$") // 2 and "<code>" not in html
+        rest = _outside_svg(html)
+        assert "$" not in rest
+        assert not re.search(r"\\[a-zA-Z]+|[_^]\{", rest), rest  # \frac, e^{, sum_{ ...
+    assert rich("costs $5") == "costs $5"  # an unpaired $ is text
+    assert rich("a $\\notacommand{x}$ b") == "a <code>\\notacommand{x}</code> b"
+
+    out = tmp_path / "r.html"
+    write_report(out, fast=True, only=[1], fmu=fmu2, peers=False)
+    text = out.read_text(encoding="utf-8")
+    assert text.count("<svg ") >= moving_average.STATEMENT.count("$") // 2
+    outside = _outside_svg(text)
+    assert "$" not in outside and not re.search(r"[_^]\{|\\frac|\\sum", outside)
+    assert not re.search(r"https?://|//cdn|mathjax", text, flags=re.IGNORECASE)
+    assert "<style type=\"text/css\">*" not in text  # no page-wide style from the SVGs
+    # the papers by name, not by their file numbers
+    assert not re.search(r"\b00[03] (eq|§|Fig)", text)
+    assert "Béarée &amp; Olabi 2013, eq. (18)" in text and "Béarée 2014, eq. (14)" in text
+    assert set(DERIVATIONS)  # the keys keep the file numbers (used by the claims)
+    assert "000 eq. (18)" not in render_html([], settings=claims_base.Settings(fast=True),
+                                             elapsed=0.0)
+
+
 def test_figures_beside(tmp_path, fmu2):
     out = tmp_path / "r.html"
     write_report(out, fast=True, only=[6], fmu=fmu2, embed=False)

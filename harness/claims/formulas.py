@@ -395,6 +395,19 @@ def mode_tf(omega1: float, zeta1: float):
     return ct.tf([-1.0], [1.0, 2 * zeta1 * omega1, omega1**2])
 
 
+PAPERS = {"000": "Béarée & Olabi 2013", "003": "Béarée 2014"}
+"""The papers' file numbers (``000 eq. (18)``) and how the report names them."""
+
+
+def paper_ref(key: str) -> str:
+    """Name the paper of a reference such as ``000 eq. (18)``: ``Béarée & Olabi 2013, eq. (18)``.
+
+    The report shows these, never the file numbers of the papers.
+    """
+    num, _, rest = key.partition(" ")
+    return f"{PAPERS[num]}, {rest}" if num in PAPERS and rest else key
+
+
 DERIVATIONS: dict[str, str] = {
     "000 eq. (18)": (
         "The text defines T_n = sum_i T_i. T_n must be the time of the last impulse "

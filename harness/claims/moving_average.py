@@ -29,11 +29,13 @@ from .signals import db, dtft, refine_maximum, refine_minimum
 TITLE = "The moving average is a comb notch"
 SOURCE = "Béarée & Olabi 2013, §2.1, eq. (5), (7), (8); Fig. 2"
 STATEMENT = (
-    "F(s) = (1 - e^{-T_F s}) / (T_F s) (eq. 5) turns a step into a ramp of length T_F; "
-    "sampled at T_e it is the moving average F(z) = (1 - z^{-N_F}) / (N_F (1 - z^{-1})) "
-    "(eq. 7), F_k = (1/N_F) sum_{i=1}^{N_F} I_{k-i+1} (eq. 8), N_F = round(T_F/T_e). "
-    "Its impulse response is a rectangle of unit area and length T_F; its frequency "
-    "response is a sinc with zeros at f = k/T_F (discrete: k/(N_F T_e)).")
+    r"$F(s) = \dfrac{1 - e^{-T_F s}}{T_F\, s}$ (eq. 5) turns a step into a ramp of length "
+    r"$T_F$; sampled at $T_e$ it is the moving average "
+    r"$F(z) = \dfrac{1 - z^{-N_F}}{N_F\,(1 - z^{-1})}$ (eq. 7), "
+    r"$F_k = \dfrac{1}{N_F} \sum_{i=1}^{N_F} I_{k-i+1}$ (eq. 8), "
+    r"$N_F = \mathrm{round}(T_F / T_e)$. Its impulse response is a rectangle of unit area "
+    r"and length $T_F$; its frequency response is a sinc with zeros at $f = k / T_F$ "
+    r"(discrete: $k / (N_F T_e)$).")
 
 
 @dataclass

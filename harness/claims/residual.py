@@ -29,14 +29,16 @@ from .base import Check, ClaimResult, Settings, Table, dress, register
 TITLE = "Residual vibration of jerk stages"
 SOURCE = "Béarée & Olabi 2013, §3.1, eq. (17)-(21), Fig. 11"
 STATEMENT = (
-    "Vib(omega) = e^{-zeta omega T_n} sqrt((sum A_i e^{zeta omega T_i} cos omega_d T_i)^2 + "
-    "(sum A_i e^{zeta omega T_i} sin omega_d T_i)^2) (eq. 18); for one jerk stage "
-    "Vib = (a_max/T_F) e^{-zeta omega T_F} sqrt(1 + e^{2 zeta omega T_F} - 2 e^{zeta omega T_F} "
-    "cos omega_d T_F) (eq. 20), and undamped 'residual vibration is a sine cardinal function "
-    "of the jerk time' (eq. 21): zero when T_F is a multiple of the natural period. 'In order "
-    "to keep the residual vibration below 20 %, the tuning error also has to be lower than "
-    "20 %.' 'A damping value below 10 % has poor effect on the residual vibration level.' "
-    "(Fig. 11: full scale = the acceleration-limited profile.)")
+    r"$\mathrm{Vib}(\omega) = e^{-\zeta\omega T_n} \sqrt{\left(\sum A_i e^{\zeta\omega T_i} "
+    r"\cos\omega_d T_i\right)^2 + \left(\sum A_i e^{\zeta\omega T_i} \sin\omega_d T_i"
+    r"\right)^2}$ (eq. 18); for one jerk stage "
+    r"$\mathrm{Vib} = \dfrac{a_{max}}{T_F} e^{-\zeta\omega T_F} \sqrt{1 + e^{2\zeta\omega T_F}"
+    r" - 2 e^{\zeta\omega T_F} \cos\omega_d T_F}$ (eq. 20), and undamped 'residual vibration "
+    "is a sine cardinal function of the jerk time' (eq. 21): zero when $T_F$ is a multiple "
+    "of the natural period. 'In order to keep the residual vibration below 20 %, the tuning "
+    "error also has to be lower than 20 %.' 'A damping value below 10 % has poor effect on "
+    "the residual vibration level.' (Fig. 11: full scale = the acceleration-limited "
+    "profile.)")
 
 F_MODE = 10.0
 """Mode frequency of the checks (Hz): period 100 ms, a whole number of 1 ms samples."""

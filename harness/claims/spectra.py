@@ -28,9 +28,10 @@ from .signals import local_maxima, rfft_spectrum, spectrum_foh, spectrum_pwl_ins
 TITLE = "Acceleration spectra of the motion laws"
 SOURCE = "Béarée 2014, §3, eq. (6)-(17), Fig. 3-5"
 STATEMENT = (
-    "Closed-form acceleration spectra for P = 1 m, T = 1 s: cubic |Q(Omega)| = 6P/(T pi^2 "
-    "Omega^2)|sin(pi Omega) - pi Omega cos(pi Omega)| (eq. 9), quintic eq. (11), "
-    "acceleration-limited eq. (15) with alpha, jerk-limited eq. (16) with alpha, beta. "
+    r"Closed-form acceleration spectra for $P$ = 1 m, $T$ = 1 s: cubic "
+    r"$|Q(\Omega)| = \dfrac{6P}{T \pi^2 \Omega^2} |\sin(\pi\Omega) - \pi\Omega\cos(\pi\Omega)|$"
+    r" (eq. 9), quintic eq. (11), acceleration-limited eq. (15) with $\alpha$, jerk-limited "
+    r"eq. (16) with $\alpha$, $\beta$. "
     "'Le premier lobe du polynôme de degré 5 est plus important que celui de la cubique ... "
     "les lobes suivants sont significativement plus faibles (rapport 2 à 3).' 'Plus [alpha] "
     "sera faible et plus le spectre de ces deux trajectoires sera riche.' 'Quant au paramètre "

@@ -34,14 +34,16 @@ from .signals import db, refine_minimum
 TITLE = "Vibration filters compared: biquad, notch, ZV shaper"
 SOURCE = "Béarée 2014, §4.1-4.2 and §5, eq. (18)-(22), Fig. 6-7"
 STATEMENT = (
-    "Inverse-model biquad F = (s^2 + 2 zeta_1 omega_1 s + omega_1^2)/((1 + tau_a s)(1 + tau_b "
-    "s)) (eq. 18), notch F = (s^2 + omega_a^2)/(s^2 + omega_b/Q s + omega_b^2) (eq. 19), ZV "
-    "shaper A = [1/(1+K), K/(1+K)] at t = [0, T_ZV], T_ZV = pi/(omega_1 sqrt(1 - zeta_1^2)) "
-    "(eq. 20-21), |F_ZV|^2 = 4 A1 A2 cos^2(omega T_ZV/2) + (A1 - A2)^2 (eq. 22). 'Le ZV "
-    "shaper réduit le contenu spectral ... aux fréquences correspondantes à (2k+1) omega_1'; "
-    "'l'allongement de la durée du mouvement est ... la demi-période du mode'; the biquad's "
-    "step response has discontinuities; shapers reach the JL's performance 'en réduisant le "
-    "temps de réponse d'une demi-période du mode propre' (§5).")
+    r"Inverse-model biquad $F = \dfrac{s^2 + 2\zeta_1\omega_1 s + \omega_1^2}{(1 + \tau_a s)"
+    r"(1 + \tau_b s)}$ (eq. 18), notch "
+    r"$F = \dfrac{s^2 + \omega_a^2}{s^2 + (\omega_b / Q)\, s + \omega_b^2}$ (eq. 19), ZV shaper "
+    r"$A = [\dfrac{1}{1+K}, \dfrac{K}{1+K}]$ at $t = [0, T_{ZV}]$, "
+    r"$T_{ZV} = \dfrac{\pi}{\omega_1 \sqrt{1 - \zeta_1^2}}$ (eq. 20-21), "
+    r"$|F_{ZV}|^2 = 4 A_1 A_2 \cos^2(\omega T_{ZV} / 2) + (A_1 - A_2)^2$ (eq. 22). 'Le ZV "
+    r"shaper réduit le contenu spectral ... aux fréquences correspondantes à "
+    r"$(2k+1)\,\omega_1$'; 'l'allongement de la durée du mouvement est ... la demi-période "
+    "du mode'; the biquad's step response has discontinuities; shapers reach the JL's "
+    "performance 'en réduisant le temps de réponse d'une demi-période du mode propre' (§5).")
 
 F_D = 10.0
 """Damped frequency of the mode (Hz): T_ZV = 1/(2 F_D) = 50 ms."""

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..figures import legend_above_data
 from ..files import OutputSet
 from ..fmu.build import BuildError, build_fmu, check_compiler
 from ..fmu.runner import generate
@@ -104,10 +105,13 @@ def _demo(o: OutputSet, no_plot: bool, quiet: bool = False) -> bool:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
-        fig = d.plot(title="Default DJL move (T_F = 80/80/60/50 ms) with its AL input")
+        fig = d.plot(title="Default DJL move (T_F = 80/80/60/50 ms) with its AL input",
+                     legend=False)
         for ax, name in zip(fig.axes, ("x", "v", "a", "j"), strict=True):
             ax.plot(jl.t, getattr(jl, name), ":", lw=1, label=f"{name} JL")
-        fig.axes[2].legend(loc="lower right", fontsize="small")
+        # one legend, in headroom above the curves (the styles are the same in every panel)
+        legend_above_data(fig.axes[0], loc="upper left",
+                          labels=["DJL", "its AL input", f"JL, T_F = {p['T_F1'] * 1e3:g} ms"])
         fig.savefig(o.path("demo_djl.png"), dpi=110)
         plt.close(fig)
         say(f"  plot: {o.final('demo_djl.png')}")

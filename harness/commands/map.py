@@ -40,7 +40,8 @@ and velocity limits, given by the [map] table of the scenario (format:
 docs/map.md); the embedded scenarios X and Y have a default grid of 10,000
 moves (z0 0..0.1 m, Z travel 0.025..0.5 m, move 0.02..0.5 m, v_max 0.25..2 m/s).
 Moves are numbered in grid order: z0, then Z travel, then move length, then
-v_max (varying fastest); --max-moves N runs the first N.
+v_max (varying fastest); --max-moves N runs N moves spread evenly over the whole
+grid (every z0 and v_max, then Z travel and move length; always the same N).
 
 The moves run in batches on a pool of processes, one per core by default
 (--workers N), or on the workers of a running Dask cluster (--scheduler
@@ -68,7 +69,7 @@ exist at the same path on the workers.
 EPILOG = """\
 examples:
   djl-fmu map X                                the 10,000-move map of scenario X, all cores
-  djl-fmu map Y --max-moves 500 --workers 2    the first 500 moves, on 2 processes
+  djl-fmu map Y --max-moves 500 --workers 2    500 moves across the grid, on 2 processes
   djl-fmu map my_axis.toml --scheduler tcp://10.0.0.5:8786
   djl-fmu map X --engine fmu --max-moves 20    through the generator FMUs (slower)
 
@@ -106,7 +107,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="TOML scenario file with a [map] table, or an embedded scenario "
                         "name (X, Y)")
     add_out_option(p, "map")
-    add_parallel_options(p)
+    add_parallel_options(p, max_moves="run only N moves, spread evenly over the whole grid "
+                                    "(deterministic)")
     add_engine_option(p, "fast", "fast")
     add_tuning_option(p, "add")
     add_map_error_option(p, "uncertainty of the 'robust' tuning")

@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import HarnessError
+from ..figures import legend_above_data
 from . import spec
 from .build import default_fmu
 
@@ -876,8 +877,12 @@ class Trajectory:
                                  float(self.params["Te"])), float(self.t[0]))
         return start + self.motion_time
 
-    def plot(self, *, al: bool = True, title: str | None = None):
-        """Plot x, v, a and j against time (the AL profile dashed); return the figure."""
+    def plot(self, *, al: bool = True, title: str | None = None, legend: bool = True):
+        """Plot x, v, a and j against time (the AL profile dashed); return the figure.
+
+        ``legend=False`` leaves the legend out (to draw it once more curves are added,
+        e.g. with :func:`harness.figures.legend_above_data`).
+        """
         import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         fig, axes = plt.subplots(4, 1, sharex=True, figsize=(8, 8))
@@ -891,11 +896,12 @@ class Trajectory:
                         drawstyle="steps-post" if al_name == "a_AL" else "default")
             ax.set_ylabel(label)
             ax.grid(True, alpha=0.3)
-        axes[0].legend(loc="lower right", fontsize="small")
         axes[-1].set_xlabel("t [s]")
         prof = spec.PROFILE_NAMES.get(int(self.params.get("profile", 3)), "?")
         fig.suptitle(title or f"{prof} profile, motion time {self.motion_time:.4g} s")
         fig.tight_layout()
+        if legend:
+            legend_above_data(axes[0], loc="upper left")
         return fig
 
 

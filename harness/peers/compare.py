@@ -66,6 +66,7 @@ import numpy as np
 
 from ..bound import bound_summary
 from ..evaluation import profile_metrics, run_case
+from ..figures import legend_outside
 from ..files import write_csv
 from ..fmu import spec as fmu_spec
 from ..fmu.runner import generate
@@ -637,14 +638,14 @@ class PeerComparison:
         """Residual against the mode-frequency error on a *stationary* mode; return the Figure."""
         import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
-        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(13, 4.8))
+        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(15, 5.2))
         self._plot_stationary(ax1, True)
         self._plot_stationary(ax2, False)
         ax1.set_ylim(0, 60)
         ax1.set_ylabel("residual [% of AL at the same frequency]")
         ax2.set_ylabel("residual amplitude [mm]")
         ax2.axhline(self.band * 1e3, color="gold", lw=2, label="settling band")
-        ax2.legend(fontsize="x-small", ncol=2)
+        legend_outside(ax2)
         fig.suptitle(title or f"Scenario {self.scenario.name}: robustness to the mode "
                      f"frequency, {STATIONARY_LABEL}, zeta = {self.robustness.zeta:g} "
                      "(methods as planned for the scenario)", fontsize="medium")
@@ -663,14 +664,14 @@ class PeerComparison:
 
         if self.map_error is None:
             raise ValueError("no map-error curves (compare_scenario(..., map_errors=None))")
-        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(13, 4.8))
+        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(15, 5.2))
         self._plot_map(ax1, True)
         self._plot_map(ax2, False)
         ax1.set_ylim(0, 60)
         ax1.set_ylabel("residual [% of AL at the same map error]")
         ax2.set_ylabel("residual amplitude [mm]")
         ax2.axhline(self.band * 1e3, color="gold", lw=2, label="settling band")
-        ax2.legend(fontsize="x-small", ncol=2)
+        legend_outside(ax2)
         fig.suptitle(title or f"Scenario {self.scenario.name}: robustness to a map error, "
                      f"{self.map_error_label} (shaded: +/-10 %, the worst case)",
                      fontsize="medium")
@@ -686,20 +687,22 @@ class PeerComparison:
         import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         two = self.map_error is not None
-        fig, axes = plt.subplots(1, 2 if two else 1, figsize=(14, 5.2), squeeze=False)
+        fig, axes = plt.subplots(1, 2 if two else 1, figsize=(16 if two else 10, 5.4),
+                                 squeeze=False)
         ax1 = axes[0, 0]
         self._plot_stationary(ax1, False)
         ax1.set_ylabel("residual amplitude [mm]")
         ax1.set_title(f"{STATIONARY_LABEL}, zeta = {self.robustness.zeta:g}",
                       fontsize="medium")
         ax1.axhline(self.band * 1e3, color="gold", lw=2, label="settling band")
-        ax1.legend(fontsize="x-small", ncol=2)
         if two:
             ax2 = axes[0, 1]
             self._plot_map(ax2, False)
             ax2.set_ylabel("residual amplitude [mm]")
             ax2.set_title(self.map_error_label + " (shaded: +/-10 %)", fontsize="medium")
             ax2.axhline(self.band * 1e3, color="gold", lw=2)
+        # one legend, right of the panels (the same methods in both): off the data
+        legend_outside(axes[0, -1], handles=ax1.get_legend_handles_labels()[0])
         fig.suptitle(title or f"Scenario {self.scenario.name}: residual of every method "
                      "against a frequency error", fontsize="medium")
         fig.tight_layout()
@@ -723,7 +726,7 @@ class PeerComparison:
         """Deflection of every method in the scenario's co-simulation; return the Figure."""
         import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
-        fig, axes = plt.subplots(2, 1, figsize=(11, 7), sharex=True)
+        fig, axes = plt.subplots(2, 1, figsize=(13, 7), sharex=True)
         for n, mo in self.methods.items():
             r = mo.run
             c, ls = _style(n)
@@ -735,7 +738,7 @@ class PeerComparison:
         axes[0].set_ylabel("a [m/s²]")
         axes[1].set_ylabel("ε [mm] (zoom)")
         axes[1].set_xlabel("t [s]")
-        axes[0].legend(fontsize="x-small", ncol=5)
+        legend_outside(axes[0])
         for ax in axes:
             ax.grid(True, alpha=0.3)
         fig.suptitle(title or f"Scenario {self.scenario.name}: every method through the plant")

@@ -73,15 +73,19 @@ def plot_runs(runs: Mapping[str, Any], *, title: str = "", band: float | None = 
     """
     import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
-    fig = plt.figure(figsize=(13, 9.5))
-    gs = fig.add_gridspec(5, 2, width_ratios=(1, 1.25), hspace=0.14, wspace=0.22)
-    left = [fig.add_subplot(gs[0, 0])]
-    left += [fig.add_subplot(gs[i, 0], sharex=left[0]) for i in range(1, 4)]
-    ax_e = fig.add_subplot(gs[0:2, 1], sharex=left[0])
-    ax_r = fig.add_subplot(gs[2, 1], sharex=left[0])
-    ax_f = fig.add_subplot(gs[3, 1], sharex=left[0])
-    ax_z = fig.add_subplot(gs[4, 1], sharex=left[0])
-    ax_m = fig.add_subplot(gs[4, 0])
+    fig = plt.figure(figsize=(13, 10.5))
+    outer = fig.add_gridspec(1, 2, width_ratios=(1, 1.25), wspace=0.22)
+    # left: x, v, a, j over a shared t axis (labelled), then the table of numbers below it
+    gl = outer[0, 0].subgridspec(2, 1, height_ratios=(4.0, 1.4), hspace=0.2)
+    gx = gl[0].subgridspec(4, 1, hspace=0.14)
+    gr = outer[0, 1].subgridspec(5, 1, hspace=0.14)
+    left = [fig.add_subplot(gx[0])]
+    left += [fig.add_subplot(gx[i], sharex=left[0]) for i in range(1, 4)]
+    ax_e = fig.add_subplot(gr[0:2], sharex=left[0])
+    ax_r = fig.add_subplot(gr[2], sharex=left[0])
+    ax_f = fig.add_subplot(gr[3], sharex=left[0])
+    ax_z = fig.add_subplot(gr[4], sharex=left[0])
+    ax_m = fig.add_subplot(gl[1])
     t_max, t_min_end, zoom = 0.0, math.inf, 0.0
     for name, r in runs.items():
         c = COLORS.get(name, None)
@@ -122,15 +126,19 @@ def plot_runs(runs: Mapping[str, Any], *, title: str = "", band: float | None = 
     for ax, lab in zip(left, ("x [m]", "v [m/s]", "a [m/s²]", "j [m/s³]"), strict=True):
         ax.set_ylabel(lab)
         ax.grid(True, alpha=0.3)
-    left[0].legend(loc="lower right", fontsize="small")
     left[0].set_title("reference of the excited axis (generator FMU)", fontsize="medium")
     ax_e.set_ylabel("ε [mm]")
     ax_e.set_title("deflection of the load ε (dotted: end of each motion)", fontsize="medium")
-    ax_e.legend(loc="upper right", fontsize="small")
+    # one legend for the whole figure (the colours are the same in every panel), above
+    # the panels: off the data
+    handles, labels = ax_e.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.96),
+               ncol=min(3, len(handles)), fontsize="small", frameon=False)
     ax_r.set_ylabel("ε [mm], zoom")
     ax_r.text(0.01, 0.95, "residual vibration (dashed: free-oscillation envelope after the "
               "motion;\nat the end of the motion it equals the residual; ▼: settled into the band)",
-              transform=ax_r.transAxes, va="top", fontsize="x-small")
+              transform=ax_r.transAxes, va="top", fontsize="x-small",
+              bbox={"facecolor": "white", "alpha": 0.75, "lw": 0, "pad": 1.5})
     ax_f.set_ylabel("f [Hz] (tuned mode)")
     ax_z.set_ylabel("z [m]")
     for ax in (ax_e, ax_r, ax_f, ax_z):
@@ -151,7 +159,8 @@ def plot_runs(runs: Mapping[str, Any], *, title: str = "", band: float | None = 
                  [_fmt(metrics[n].settling_time) for n in cols]]
         labels = ["residual [mm]", "peak |ε| (sampled) [mm]", "motion time [s]",
                   "settling [s] (1)"]
-        notes = [f"residual: free-oscillation amplitude at the end; {PEAK_LABEL}: phase-dependent",
+        notes = ["residual: free-oscillation amplitude at the end;",
+                 f"{PEAK_LABEL}: phase-dependent",
                  "(1) settling band" + (f": {band_label.removeprefix('band: ')}"
                                         if band_label else "")]
         if any(math.isfinite(getattr(metrics[n], "settling_time_paper", math.nan))
@@ -160,12 +169,17 @@ def plot_runs(runs: Mapping[str, Any], *, title: str = "", band: float | None = 
             cells.append([_fmt(metrics[n].settling_time_paper) for n in cols])
             labels.append("settling [s] (2)")
             notes.append(f"(2) {PAPER_BAND_LABEL}")
+        # no bbox: every column as wide as its text (a bbox squeezes them and clips it)
         tab = ax_m.table(cellText=cells, colLabels=cols, rowLabels=labels, cellLoc="center",
-                         bbox=[0.42, 0.3, 0.58, 0.7])
+                         loc="upper center")
         tab.auto_set_font_size(False)
-        tab.set_fontsize(8)
-        ax_m.text(0.0, 0.0, "\n".join(notes), transform=ax_m.transAxes, fontsize="x-small",
-                  va="bottom")
-    fig.suptitle(title)
-    fig.subplots_adjust(left=0.09, right=0.98, top=0.93, bottom=0.06)
+        tab.set_fontsize(8 if len(cols) <= 4 else 7 if len(cols) <= 6 else 6)  # fits the column
+        tab.auto_set_column_width(list(range(-1, len(cols))))
+        tab.scale(1.0, 1.25)
+        # under the table, which is centred: the block centred too, its lines left-aligned
+        ax_m.text(0.5, 0.0, "\n".join(notes), transform=ax_m.transAxes, fontsize="x-small",
+                  va="bottom", ha="center", multialignment="left")
+    fig.suptitle(title, y=0.985)
+    top = 0.92 - 0.022 * math.ceil(len(handles) / 3)  # below the legend's rows
+    fig.subplots_adjust(left=0.08, right=0.98, top=top, bottom=0.05)
     return fig
