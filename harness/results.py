@@ -760,7 +760,7 @@ class SweepResult(TableMixin):
         import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
         cases = self.distinct()
-        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(15, 7.5), width_ratios=(1, 1.55))
+        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(15, 9), width_ratios=(1, 1.55))
         jl = np.array([c.metric("JL", "residual") for c in cases]) * 1e3
         djl = np.array([c.metric("DJL", "residual") for c in cases]) * 1e3
         dz = np.array([c.scenario.z.distance for c in cases])
@@ -803,7 +803,7 @@ class SweepResult(TableMixin):
                                f"({self.band_label})"),
                      fontsize="medium")
         # fixed margins (for these labels at this size): no layout pass before the drawing
-        fig.subplots_adjust(left=0.07, right=0.985, top=0.87, bottom=0.1, wspace=0.25)
+        fig.subplots_adjust(left=0.07, right=0.985, top=0.82, bottom=0.2, wspace=0.25)
         return fig
 
 

@@ -183,7 +183,7 @@ class RobustnessResult:
         """
         import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
-        fig, ax = plt.subplots(figsize=(9, 6.3))
+        fig, ax = plt.subplots(figsize=(9, 7))
         x = 100.0 * self.errors
         ax.axvspan(-100 * span, 100 * span, color="0.88", lw=0,
                    label=f"+/-{100 * span:g} % (worst case)")
@@ -208,7 +208,7 @@ class RobustnessResult:
         ax.set_title(title or f"{name}: robustness to a map error, {self.label}",
                      fontsize="medium")
         # fixed margins (for these labels at this size): no layout pass before the drawing
-        fig.subplots_adjust(left=0.1, right=0.98, top=0.94, bottom=0.1)
+        fig.subplots_adjust(left=0.1, right=0.98, top=0.94, bottom=0.24)
         return fig
 
 

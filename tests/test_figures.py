@@ -139,3 +139,21 @@ def test_sweep_figure_title_inside_and_bars_labelled_with_the_moves():
     leg = bars.get_legend()
     assert leg.get_window_extent(r).y0 >= bars.get_window_extent(r).y1 - 1  # above the bars
     plt.close(fig)
+
+
+def test_robustness_figure_legend_and_labels_on_the_page():
+    """The map-error figure's legend sits below the axes, off the data, and on the page."""
+    from harness.sweeps import run_scenario
+
+    sc = parse_scenario(tomllib.loads('name = "rob"\n' + SMALL_AXIS), "rob.toml")
+    rob = run_scenario(sc, engine=_engine(), robustness=True).robustness
+    fig = rob.plot()
+    r = _drawn(fig)
+    (ax,) = fig.axes
+    leg = ax.get_legend()
+    assert leg is not None and len(leg.get_texts()) >= 3
+    box = leg.get_window_extent(r)
+    assert _inside(box, fig.bbox)
+    assert box.y1 <= ax.get_window_extent(r).y0  # below the axes: off every curve
+    assert _inside(ax.get_tightbbox(r, bbox_extra_artists=[]), fig.bbox, tol=1.0)
+    plt.close(fig)
