@@ -251,7 +251,8 @@ def peers_section(settings: Settings,
     Every method goes through the same co-simulation (generator FMU or the peer's exact
     motion, Z axis, plant) and the same metrics as ``djl-fmu compare``, at the same
     settling band and over the same map-error range (time-varying plant, fast engine);
-    fast settings use fewer points on the robustness curves.  One figure per scenario:
+    fast settings use fewer points on the robustness curves and leave out the physical
+    limit (its linear programme).  One figure per scenario:
     the stationary-mode curves beside the time-varying map-error curves.
     """
     if not ruckig_available():
@@ -293,7 +294,10 @@ def peers_section(settings: Settings,
         sc = load_scenario(name).with_fmu(
             None if settings.fmu is None else Path(settings.fmu), settings.fmi_version)
         try:
-            cmp = compare_scenario(sc, errors=errors, map_errors=map_errors)
+            # the physical limit (a linear programme, ~30 s a scenario until cached) in
+            # the full report only; --fast is the quick look
+            cmp = compare_scenario(sc, errors=errors, map_errors=map_errors,
+                                   bound=not settings.fast)
             fig = cmp.plot_robustness()
             png = _figure_png(fig)
             plt.close(fig)

@@ -56,7 +56,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_out_option(p, "report", kind="file", default=Path("report.html"))
     p.add_argument("--fast", action="store_true",
-                   help="small grids, as in the test suite (default: full grids)")
+                   help="small grids, as in the test suite, and no physical-limit column in "
+                        "the peers section (default: full grids, with it)")
     p.add_argument("--claims", type=_claim_list, default=None, metavar="N[,N...]",
                    help="only these claims, e.g. --claims 1,3 (default: all)")
     p.add_argument("--fmi-version", type=int, choices=(2, 3), default=2,
