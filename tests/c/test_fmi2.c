@@ -3,6 +3,7 @@
  * under AddressSanitizer + UBSan or valgrind: normal run, FMU state save /
  * restore / serialise, every kind of bad call, reset, two instances.
  */
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -516,6 +517,17 @@ static void run_forged_states(void)
     FORGE(d.p.v_max = 2.0, "not made from its parameters");
     FORGE(d.out.x += 1e-9, "outputs are not those of its plan");
     FORGE(d.planned = 0, "without a plan");
+    /* issue 21: finite but beyond the limits it obeys (level0 = -DBL_MAX and a stop once
+     * gave infinite outputs after OK) */
+    FORGE(d.plan.level0 = -DBL_MAX, "acceleration level is outside the acceleration limits");
+    FORGE(d.plan.level0 = 1.5 * d.p.a_max, "acceleration level is outside");
+    FORGE(d.plan.step[0].A = 1e300, "step of the plan is outside the acceleration limits");
+    FORGE(d.plan.piece[d.plan.n_pieces - 2].j = 1e300, "outside the limits");
+    FORGE(d.plan.piece[d.plan.n_pieces - 2].v = 2.0 * d.p.v_max, "outside the limits");
+    FORGE(d.plan.piece[d.plan.n_pieces - 2].a = -DBL_MAX, "outside the limits");
+    FORGE(d.plan.piece[d.plan.n_pieces - 1].x = 1e305, "outside the limits");
+    FORGE(d.plan.v_reached = 1e300, "outside its limits");
+    FORGE(d.f_seen = -1.0, "f_mode last seen");
     /* unchecked: the checksum alone */
     memcpy(&d, buf, sizeof d);
     d.plan.seg[0].frac += 1.0;
@@ -631,6 +643,81 @@ static void run_commands(int jerk_source)
     fmi2FreeInstance(c);
 }
 
+/* Issue 21 (A): a replanned move reported done off its target when v_max was huge (the
+ * arrival tolerance grew with v_max Te).  Steps of 0.4 s, then on to rest: done only on
+ * the target, to a few ulps. */
+static double land_on(fmi2Component c, double target, double t, const char *what)
+{
+    int k;
+    double x;
+    k = 0;
+    do { /* at least one step: a command acts from the next */
+        CHECK(fmi2DoStep(c, t, 0.4, fmi2True) == fmi2OK, "%s: step: %s", what, last_message);
+        t += 0.4;
+    } while (++k < 200 && !get_bool(c, VR_DONE));
+    x = get_real(c, VR_X);
+    CHECK(get_bool(c, VR_DONE) && !get_bool(c, VR_BUSY) && get_real(c, VR_V) == 0.0 &&
+              get_real(c, VR_A) == 0.0, "%s: not at rest", what);
+    CHECK(fabs(x - target) <= 4.0 * DBL_EPSILON * fabs(target), "%s: done at x = %.17g, not %.17g",
+          what, x, target);
+    return t;
+}
+
+static void run_issue21_landing(void)
+{
+    static const double targets[2] = {7e-4, 16.0};
+    fmi2Component c;
+    fmi2ValueReference vjs = VR_JERK_SOURCE, vp = VR_PROFILE;
+    fmi2Integer three = 3, al = 1;
+    double t;
+    int i;
+    /* the default move with v_max = 1e300, a new target with an execute edge, one step */
+    for (i = 0; i < 2; i++) {
+        c = make("issue21-a");
+        set_real(c, VR_V_MAX, 1e300);
+        CHECK(fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) == fmi2OK,
+              "init");
+        set_real(c, VR_TARGET, targets[i]);
+        set_bool(c, VR_EXECUTE, 1);
+        CHECK(fmi2DoStep(c, 0.0, 0.4, fmi2True) == fmi2OK, "step: %s", last_message);
+        CHECK(!get_bool(c, VR_DONE) || fabs(get_real(c, VR_X) - targets[i]) <= 1e-18 +
+              4.0 * DBL_EPSILON * targets[i], "done off the target: x = %.17g",
+              get_real(c, VR_X));
+        land_on(c, targets[i], 0.4, i ? "v_max 1e300, target 16" : "v_max 1e300, target 7e-4");
+        fmi2FreeInstance(c);
+    }
+    /* jerk_source 3, f_mode changed, no command: the parametric 0.3 m move (rested at 0.105
+     * or 0.119 before) */
+    c = make("issue21-js3");
+    CHECK(fmi2SetInteger(c, &vjs, 1, &three) == fmi2OK, "jerk_source");
+    set_real(c, VR_DISTANCE, 0.3);
+    set_real(c, VR_V_MAX, 1e300);
+    CHECK(fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) == fmi2OK,
+          "init");
+    set_real(c, VR_F_MODE, 5.0);
+    CHECK(fmi2DoStep(c, 0.0, 0.05, fmi2True) == fmi2OK, "step");
+    set_real(c, VR_F_MODE, 13.0);
+    land_on(c, 0.3, 0.05, "jerk_source 3, f_mode 5 -> 13");
+    fmi2FreeInstance(c);
+    /* AL, v_max = 3.4e9: a new target in the middle of the move, then one 3e-8 m past the
+     * rest (taken for arrived before: 3e-8 < 1e-12 v_max Te) */
+    c = make("issue21-al");
+    CHECK(fmi2SetInteger(c, &vp, 1, &al) == fmi2OK, "AL");
+    set_real(c, VR_V_MAX, 3.4e9);
+    CHECK(fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) == fmi2OK,
+          "init");
+    CHECK(fmi2DoStep(c, 0.0, 0.1, fmi2True) == fmi2OK, "step");
+    set_real(c, VR_TARGET, 0.05);
+    set_bool(c, VR_EXECUTE, 1);
+    t = land_on(c, 0.05, 0.1, "AL, v_max 3.4e9, target 0.05");
+    set_bool(c, VR_EXECUTE, 0);
+    CHECK(fmi2DoStep(c, t, 0.1, fmi2True) == fmi2OK, "step: %s", last_message);
+    set_real(c, VR_TARGET, 0.05 + 3e-8);
+    set_bool(c, VR_EXECUTE, 1);
+    land_on(c, 0.05 + 3e-8, t + 0.1, "AL, v_max 3.4e9, 3e-8 m on");
+    fmi2FreeInstance(c);
+}
+
 int main(int argc, char **argv)
 {
     /* argv[1]: corruptions of a serialized state (10^6 for the full campaign of
@@ -644,6 +731,7 @@ int main(int argc, char **argv)
     run_forged_states();
     run_commands(2);
     run_commands(3);
+    run_issue21_landing();
     run_state_fuzz(n_fuzz, n_sealed);
     printf("fmi2: %d failures, %d errors logged\n", failures, errors_logged);
     return failures ? 1 : 0;
