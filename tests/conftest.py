@@ -37,18 +37,30 @@ def fmu_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return tmp_path_factory.mktemp("fmus")
 
 
+def _extra_cflags(fmi_version: int) -> tuple[str, ...]:
+    """Extra flags for the session's FMU binaries from ``DJL_TEST_FMU_CFLAGS``.
+
+    ``{fmi}`` is replaced by the FMI version; tests/c/coverage.sh builds them with
+    ``--coverage -dumpdir DIR/fmu{fmi}/`` (empty, the default: the FMU as shipped).
+    """
+    flags = os.environ.get("DJL_TEST_FMU_CFLAGS", "").replace("{fmi}", str(fmi_version))
+    return tuple(flags.split())
+
+
 @pytest.fixture(scope="session")
 def fmu2(fmu_dir: Path) -> Path:
     from harness.fmu.build import build_fmu
 
-    return build_fmu(2, fmu_dir / "JerkLimitedTrajectory-fmi2.fmu")
+    return build_fmu(2, fmu_dir / "JerkLimitedTrajectory-fmi2.fmu",
+                     extra_cflags=_extra_cflags(2))
 
 
 @pytest.fixture(scope="session")
 def fmu3(fmu_dir: Path) -> Path:
     from harness.fmu.build import build_fmu
 
-    return build_fmu(3, fmu_dir / "JerkLimitedTrajectory-fmi3.fmu")
+    return build_fmu(3, fmu_dir / "JerkLimitedTrajectory-fmi3.fmu",
+                     extra_cflags=_extra_cflags(3))
 
 
 @pytest.fixture(scope="session")

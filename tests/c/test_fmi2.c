@@ -643,6 +643,74 @@ static void run_commands(int jerk_source)
     fmi2FreeInstance(c);
 }
 
+/* Every entry point of the FMI 2 API that this co-simulation FMU does not provide, and
+ * the status getters: each refuses with fmi2Error and a message naming it (the
+ * instance then in the Error state, Reset brings it back), or answers as the standard
+ * says; the version strings; Instantiate's refusals (issue 21: found uncovered). */
+static void run_entry_points(void)
+{
+    fmi2Component c = ready("entry");
+    fmi2ValueReference vr = VR_X;
+    fmi2Real r = 0.0;
+    fmi2Integer i = 0;
+    fmi2Boolean b = fmi2True;
+    fmi2Status st = fmi2Error;
+    fmi2String str = "x";
+    fmi2EventInfo ev;
+    fmi2CallbackFunctions nolog = {NULL, calloc, free, NULL, NULL};
+    CHECK(strcmp(fmi2GetVersion(), "2.0") == 0, "version %s", fmi2GetVersion());
+    CHECK(strcmp(fmi2GetTypesPlatform(), "default") == 0, "types platform");
+    CHECK(fmi2GetStatus(c, fmi2DoStepStatus, &st) == fmi2OK && st == fmi2OK, "status");
+    CHECK(fmi2GetBooleanStatus(c, fmi2Terminated, &b) == fmi2OK && b == fmi2False, "terminated");
+    CHECK(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &r) == fmi2OK && r == 0.0, "last time");
+    CHECK(fmi2GetString(c, &vr, 0, &str) == fmi2OK && fmi2SetString(c, &vr, 0, &str) == fmi2OK,
+          "no strings asked");
+    CHECK(fmi2SetRealInputDerivatives(c, &vr, 0, &i, &r) == fmi2OK &&
+          fmi2GetRealOutputDerivatives(c, &vr, 0, &i, &r) == fmi2OK, "no derivatives asked");
+#define REFUSED(call, fragment)                                                                  \
+    do {                                                                                         \
+        expect_error(call, fragment);                                                            \
+        CHECK(fmi2Reset(c) == fmi2OK, "reset after %s", fragment);                              \
+        CHECK(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) == fmi2OK &&          \
+              fmi2EnterInitializationMode(c) == fmi2OK &&                                        \
+              fmi2ExitInitializationMode(c) == fmi2OK, "init after %s", fragment);                \
+    } while (0)
+    REFUSED(fmi2GetRealStatus(c, fmi2DoStepStatus, &r), "only fmi2LastSuccessfulTime");
+    REFUSED(fmi2GetBooleanStatus(c, fmi2DoStepStatus, &b), "only fmi2Terminated");
+    REFUSED(fmi2GetIntegerStatus(c, fmi2DoStepStatus, &i), "no integer status");
+    REFUSED(fmi2GetStringStatus(c, fmi2DoStepStatus, &str), "no string status");
+    REFUSED(fmi2CancelStep(c), "never returns fmi2Pending");
+    REFUSED(fmi2GetString(c, &vr, 1, &str), "has no String");
+    REFUSED(fmi2SetString(c, &vr, 1, &str), "has no String");
+    REFUSED(fmi2SetRealInputDerivatives(c, &vr, 1, &i, &r), "input derivatives are not used");
+    REFUSED(fmi2GetRealOutputDerivatives(c, &vr, 1, &i, &r), "fmi2GetRealOutputDerivatives");
+    REFUSED(fmi2GetDirectionalDerivative(c, &vr, 1, &vr, 1, &r, &r), "co-simulation only");
+    REFUSED(fmi2EnterEventMode(c), "fmi2EnterEventMode is not supported");
+    REFUSED(fmi2NewDiscreteStates(c, &ev), "fmi2NewDiscreteStates is not supported");
+    REFUSED(fmi2EnterContinuousTimeMode(c), "fmi2EnterContinuousTimeMode is not supported");
+    REFUSED(fmi2CompletedIntegratorStep(c, fmi2True, &b, &b), "fmi2CompletedIntegratorStep");
+    REFUSED(fmi2SetTime(c, 0.0), "fmi2SetTime is not supported");
+    REFUSED(fmi2SetContinuousStates(c, &r, 1), "fmi2SetContinuousStates is not supported");
+    REFUSED(fmi2GetDerivatives(c, &r, 1), "fmi2GetDerivatives is not supported");
+    REFUSED(fmi2GetEventIndicators(c, &r, 1), "fmi2GetEventIndicators is not supported");
+    REFUSED(fmi2GetContinuousStates(c, &r, 1), "fmi2GetContinuousStates is not supported");
+    REFUSED(fmi2GetNominalsOfContinuousStates(c, &r, 1), "fmi2GetNominalsOfContinuousStates");
+#undef REFUSED
+    CHECK(fmi2EnterEventMode(NULL) == fmi2Error, "NULL instance");
+    still_usable(c, 0.0);
+    fmi2FreeInstance(c);
+    /* Instantiate: an empty name, model exchange, another GUID: NULL, with a message */
+    last_message[0] = '\0';
+    CHECK(fmi2Instantiate("", fmi2CoSimulation, DJL_INSTANTIATION_TOKEN, "", &cb, 0, 0) == NULL &&
+          strstr(last_message, "non-empty") != NULL, "empty name: %s", last_message);
+    CHECK(fmi2Instantiate("me", fmi2ModelExchange, DJL_INSTANTIATION_TOKEN, "", &cb, 0, 0) ==
+          NULL && strstr(last_message, "co-simulation only") != NULL, "model exchange");
+    CHECK(fmi2Instantiate("g", fmi2CoSimulation, "{0}", "", &cb, 0, 0) == NULL &&
+          strstr(last_message, "GUID") != NULL, "GUID");
+    CHECK(fmi2Instantiate("", fmi2CoSimulation, DJL_INSTANTIATION_TOKEN, "", &nolog, 0, 0) ==
+          NULL, "without a logger");
+}
+
 /* Issue 21 (A): a replanned move reported done off its target when v_max was huge (the
  * arrival tolerance grew with v_max Te).  Steps of 0.4 s, then on to rest: done only on
  * the target, to a few ulps. */
@@ -732,6 +800,7 @@ int main(int argc, char **argv)
     run_commands(2);
     run_commands(3);
     run_issue21_landing();
+    run_entry_points();
     run_state_fuzz(n_fuzz, n_sealed);
     printf("fmi2: %d failures, %d errors logged\n", failures, errors_logged);
     return failures ? 1 : 0;
