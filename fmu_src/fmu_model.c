@@ -882,7 +882,9 @@ const char *model_state_flaw(const model_data *d)
         return "a value of the plan is outside its limits";
     /* v_max up to the rounding a piece of L seconds accumulates (tests/c/test_core.c) */
     for (i = 0; i + 1 < pl->n_pieces; i++)
-        lmax = djl_fmax(lmax, (double)(pl->piece[i + 1].k - pl->piece[i].k) * pl->p.Te);
+        /* in doubles: the pieces' order is checked below (found by fuzz_state: int64_t
+         * differences of forged indices overflowed) */
+        lmax = djl_fmax(lmax, ((double)pl->piece[i + 1].k - (double)pl->piece[i].k) * pl->p.Te);
     vlim += 4.0 * 2.220446049250313e-16 * amx * lmax;
     /* the jerk: a sum of the ramps running (each A / (N Te)), of the steps listed, or of
      * stages of the plan's jerk times within the limits */
