@@ -112,7 +112,18 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         p.seg_distance[i] = rd_double(&r);
         p.seg_v_end[i] = rd_u8(&r) & 1 ? 0.0 : rd_double(&r);
     }
+    if (getenv("FUZZ_VERBOSE")) {
+        fprintf(stderr, "profile %d short_stage %d Te %.17g x0 %.17g v0 %.17g distance %.17g "
+                "v_e %.17g v_max %.17g a_max %.17g d_max %.17g T_F %.17g %.17g %.17g %.17g "
+                "n_segments %d\n", (int)p.profile, (int)p.short_stage, p.Te, p.x0, p.v0,
+                p.distance, p.v_e, p.v_max, p.a_max, p.d_max, p.T_F[0], p.T_F[1], p.T_F[2],
+                p.T_F[3], (int)p.n_segments);
+        for (i = 0; i < p.n_segments; i++)
+            fprintf(stderr, "  segment %d: %.17g m, v_end %.17g\n", i, p.seg_distance[i],
+                    p.seg_v_end[i]);
+    }
     st = djl_plan_motion(&p, &plan, &e);
+    if (getenv("FUZZ_VERBOSE")) fprintf(stderr, "status %d: %s\n", (int)st, e.message);
     if (st != DJL_OK) {
         check_refusal(st, &e, "plan");
         return 0;
