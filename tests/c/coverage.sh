@@ -64,7 +64,7 @@ fi
 run() { # name, arguments: the suite's checks pass under coverage too
     name=$1
     shift
-    log "running $name $*"
+    log "running $name ($# arguments)"
     "$COV/bin/$name" "$@" > "$COV/$name.out" 2>&1 || { cat "$COV/$name.out" >&2; exit 1; }
 }
 # shellcheck disable=SC2086

@@ -697,6 +697,54 @@ static void run_entry_points(void)
     REFUSED(fmi2GetNominalsOfContinuousStates(c, &r, 1), "fmi2GetNominalsOfContinuousStates");
 #undef REFUSED
     CHECK(fmi2EnterEventMode(NULL) == fmi2Error, "NULL instance");
+    /* debug logging: every category (none named), an unknown one (a warning) */
+    CHECK(fmi2SetDebugLogging(c, fmi2True, 0, NULL) == fmi2OK, "logging on");
+    {
+        fmi2String cats[1] = {"noSuchCategory"};
+        /* (the warning is a logStatusWarning message: filtered out, as only the named,
+         * unknown, category is on) */
+        CHECK(fmi2SetDebugLogging(c, fmi2True, 1, cats) == fmi2Warning, "unknown category");
+    }
+    /* a damaged state given to be overwritten (get) or filled (deserialise): refused */
+    {
+        fmi2FMUstate s = NULL, s2 = NULL;
+        size_t size = 0;
+        fmi2Byte *buf;
+        CHECK(fmi2GetFMUstate(c, &s) == fmi2OK, "get");
+        CHECK(fmi2SerializedFMUstateSize(c, s, &size) == fmi2OK, "size");
+        buf = (fmi2Byte *)malloc(size);
+        CHECK(fmi2SerializeFMUstate(c, s, buf, size) == fmi2OK, "serialize");
+        ((model_data *)s)->n += 1; /* the checksum no longer holds */
+        s2 = s;
+        expect_error(fmi2GetFMUstate(c, &s2), "state to overwrite");
+        CHECK(fmi2Reset(c) == fmi2OK && fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0) == fmi2OK &&
+              fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) == fmi2OK,
+              "init");
+        expect_error(fmi2DeSerializeFMUstate(c, buf, size, &s2), "state to overwrite");
+        CHECK(fmi2Reset(c) == fmi2OK && fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0) == fmi2OK &&
+              fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) == fmi2OK,
+              "init");
+        fmi2FreeFMUstate(c, &s);
+        free(buf);
+    }
+    /* the outputs read with a parameter (the general path, not the per-step fast one),
+     * and each read first in initialisation mode (before the plan exists): the same values */
+    {
+        fmi2ValueReference outs[8] = {VR_X, VR_V, VR_A, VR_J, VR_X_AL, VR_V_AL, VR_A_AL, VR_TE};
+        double mixed[8], one;
+        int k;
+        CHECK(fmi2DoStep(c, 0.0, 0.05, fmi2True) == fmi2OK, "step");
+        CHECK(fmi2GetReal(c, outs, 8, mixed) == fmi2OK, "mixed read");
+        for (k = 0; k < 7; k++)
+            CHECK(fmi2GetReal(c, &outs[k], 1, &one) == fmi2OK && one == mixed[k], "output %d", k);
+        for (k = 0; k < 7; k++) {
+            CHECK(fmi2Reset(c) == fmi2OK && fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0) == fmi2OK &&
+                  fmi2EnterInitializationMode(c) == fmi2OK, "init");
+            CHECK(fmi2GetReal(c, &outs[k], 1, &one) == fmi2OK && isfinite(one) &&
+                  (k != 0 || one == 0.0), "output %d at the start: %g", k, one);
+            CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit");
+        }
+    }
     still_usable(c, 0.0);
     fmi2FreeInstance(c);
     /* Instantiate: an empty name, model exchange, another GUID: NULL, with a message */

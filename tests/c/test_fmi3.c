@@ -482,8 +482,35 @@ static void run_entry_points(void)
     REFUSED(fmi3EnterStepMode(c), "fmi3EnterStepMode is not supported");
     REFUSED(fmi3GetOutputDerivatives(c, &vr, 1, &order, &r, 1), "fmi3GetOutputDerivatives is");
     REFUSED(fmi3ActivateModelPartition(c, vr, 0.0), "fmi3ActivateModelPartition is not");
-#undef REFUSED
     CHECK(fmi3EnterEventMode(NULL) == fmi3Error, "NULL instance");
+    {
+        size_t n = 7, sz = 1;
+        fmi3Binary bin = NULL;
+        fmi3FMUState s = NULL, s2 = NULL;
+        fmi3Byte *buf;
+        fmi3String cats[1] = {"noSuchCategory"};
+        CHECK(fmi3GetNumberOfEventIndicators(c, &n) == fmi3OK && n == 0, "event indicators");
+        n = 7;
+        CHECK(fmi3GetNumberOfContinuousStates(c, &n) == fmi3OK && n == 0, "continuous states");
+        REFUSED(fmi3SetBinary(c, &vr, 1, &sz, (const fmi3Binary *)&bin, 1),
+                "fmi3SetBinary: value reference");
+        CHECK(fmi3SetDebugLogging(c, fmi3True, 0, NULL) == fmi3OK, "logging on");
+        CHECK(fmi3SetDebugLogging(c, fmi3True, 1, cats) == fmi3Warning, "unknown category");
+        /* a damaged state to overwrite or fill, a buffer too small: refused */
+        CHECK(fmi3GetFMUState(c, &s) == fmi3OK, "get");
+        CHECK(fmi3SerializedFMUStateSize(c, s, &sz) == fmi3OK, "size");
+        buf = (fmi3Byte *)malloc(sz);
+        REFUSED(fmi3SerializeFMUState(c, s, buf, sz - 1), "buffer of");
+        CHECK(fmi3SerializeFMUState(c, s, buf, sz) == fmi3OK, "serialize");
+        ((char *)s)[sz - 1] ^= 1; /* the checksum no longer holds */
+        s2 = s;
+        REFUSED(fmi3GetFMUState(c, &s2), "state to overwrite");
+        REFUSED(fmi3SerializeFMUState(c, s, buf, sz), "checksum");
+        REFUSED(fmi3DeserializeFMUState(c, buf, sz, &s2), "state to overwrite");
+        fmi3FreeFMUState(c, &s);
+        free(buf);
+    }
+#undef REFUSED
     still_usable(c);
     fmi3FreeInstance(c);
     /* Instantiate: refusals, NULL with a message */
