@@ -1077,7 +1077,10 @@ def check_fmode_ramps(rec: Record, log: list[Any]) -> int:
     (away from the command it is not clean), or shortened, logged as a warning (then only
     level / Te bounds its jerk); (3) a stop's last ramp, split over two samples, lasts N + 1.
 
-    Every ramp: |jerk| <= max(a_max, d_max) / (N Te) for the shortest jerk time N it may have.
+    Every ramp: |jerk| <= max(a_max, d_max) / (N Te) for the shortest jerk time N it may have
+    (a ramp that overlaps one of the opposite jerk may show up later than it starts, the sum
+    flat meanwhile: then any jerk time read since that opposite run began; a ramp placed to
+    the fraction of a sample shows as contiguous runs of one sign: the first one's).
     A clean ramp (from a = 0 to a plateau or from a plateau to a = 0, a constant for the
     longest jerk time in force before it and right after it, away from any command) lasts one
     of the jerk times it may have.  Returns the clean ramps checked.
@@ -1100,6 +1103,7 @@ def check_fmode_ramps(rec: Record, log: list[Any]) -> int:
     runs = _stage_runs(rec)
     assert runs, "no stage ran"
     n_clean = 0
+    before: tuple[int, float, int] | None = None   # the last run: its end, jerk, bound
     for s, length, jerk, label in runs:
         fi = f_index(s)
         f = f_of[fi] if fi >= 0 else rec.f_init
@@ -1114,6 +1118,29 @@ def check_fmode_ramps(rec: Record, log: list[Any]) -> int:
                f"{a[s]!r} -> {a[s + length]!r}); f_mode {f!r} Hz (step {fi}) gives {want} "
                f"samples, the documented exceptions allow {sorted(lengths)}\n" + rec.describe())
         n_bound = 1 if shortened else min(allowed)   # exception 2b
+        # Ramps overlap: a ramp that starts while one of the opposite jerk is still running
+        # leaves the sum flat for a while, so the visible run starts later than the ramp
+        # (e.g. the end of a deceleration stage cut by a command, a sample after it began:
+        # the two 2-sample ramps cancel for one sample, and the second appears as a
+        # 1-sample run).  Its jerk time is then the one read when the hidden start was,
+        # somewhere since the opposite run began.
+        prev = s - 1
+        while prev >= 0 and flat[prev]:
+            prev -= 1
+        if (prev >= 0 and prev < s - 1 and abs(a[s]) > ea and J[prev] * jerk < 0.0
+                and s - prev <= P):
+            p0 = prev
+            while p0 > 0 and not flat[p0 - 1] and J[p0 - 1] * J[prev] > 0.0:
+                p0 -= 1
+            hidden = {n_of_f(f_of[i] if i >= 0 else rec.f_init, Te)
+                      for i in range(f_index(p0), fi + 1)}
+            n_bound = min(n_bound, *hidden)
+        # A ramp that starts between samples (a landing's ending ramp, placed to the
+        # fraction of a sample) shows as contiguous runs of one sign and different jerks:
+        # one ramp, with the jerk time of the run it started in.
+        if before is not None and before[0] == s and before[1] * jerk > 0.0:
+            n_bound = min(n_bound, before[2])
+        before = (s + length, jerk, n_bound)
         assert abs(jerk) * n_bound * Te <= ax.level * (1 + 1e-9), "jerk above the bound: " + ctx
         e = s + length
         clean = (s >= P and e < len(J) and flat[s - P:s].all() and flat[e]
