@@ -751,10 +751,10 @@ static djl_status plan_in_units(const djl_params *p, const djl_params *user, int
  * a_al) whose largest magnitude over the pieces is a subnormal double: its
  * values would have lost their digits (smaller values of a quantity that
  * also has normal ones, rounding residues, are harmless). */
-static int plan_clean(const djl_plan *pl)
+static int plan_big(const djl_plan *pl, double big[7])
 {
-    double big[7] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
     int i, q;
+    for (q = 0; q < 7; q++) big[q] = 0.0;
     for (i = 0; i < pl->n_pieces; i++) {
         const djl_piece *pc = &pl->piece[i];
         double val[7];
@@ -770,6 +770,16 @@ static int plan_clean(const djl_plan *pl)
             big[q] = dmax2(big[q], djl_fabs(val[q]));
         }
     }
+    return 1;
+}
+
+/* The largest magnitude of each quantity over the pieces (plan_big: 0 if one is not
+ * finite), then whether the plan is clean. */
+static int plan_clean(const djl_plan *pl)
+{
+    double big[7];
+    int q;
+    if (!plan_big(pl, big)) return 0;
     for (q = 0; q < 7; q++)
         if (big[q] != 0.0 && big[q] < DJL_MIN_MAGNITUDE) return 0;
     return 1;
@@ -799,8 +809,9 @@ static djl_status plan_scaled(const djl_params *p, int kl, int kt, djl_plan *pla
 {
     djl_params q = *p;
     djl_status st;
-    double big = 0.0;
-    int i, n = p->n_segments == 0 ? 1 : p->n_segments, Nmin = 0;
+    double big = 0.0, before[7], after[7];
+    djl_error eq;
+    int i, n = p->n_segments == 0 ? 1 : p->n_segments, Nmin = 0, lost = 0;
     int ev = kl - kt, ea = kl - 2 * kt, ej = kl - 3 * kt; /* m/s, m/s^2, m/s^3 */
     q.Te = djl_ldexp(p->Te, kt);
     for (i = 0; i < 4; i++) q.T_F[i] = djl_ldexp(p->T_F[i], kt);
@@ -815,11 +826,26 @@ static djl_status plan_scaled(const djl_params *p, int kl, int kt, djl_plan *pla
         q.seg_distance[i] = djl_ldexp(p->seg_distance[i], kl);
         q.seg_v_end[i] = djl_ldexp(p->seg_v_end[i], ev);
     }
+    /* A limit beyond a double in these units is one the motion never comes near (a
+     * distance of about 1 over samples of about 1 ms): planned with 2^1000 instead, a
+     * stricter limit, so that the plan is made (and, if its values leave the normal
+     * doubles, refused as too small below).  Issue 21: Te = 8e298 s with a_max = 10
+     * m/s^2 overflowed here and the motion was reported as an internal error. */
+    if (!djl_isfinite(q.v_max)) q.v_max = djl_ldexp(1.0, 1000);
+    if (!djl_isfinite(q.a_max)) q.a_max = djl_ldexp(1.0, 1000);
+    if (!djl_isfinite(q.d_max)) q.d_max = djl_ldexp(1.0, 1000);
     /* the parameters must survive the change of units (they may span more
-     * than a double's range between them) */
-    if (djl_validate(&q, NULL) != DJL_OK) return DJL_E_INTERNAL;
+     * than a double's range between them): if not, no double plan holds them all
+     * (issue 21: Te = 5e303 s with jerk times of 0.08 s was an internal error) */
+    if (djl_validate(&q, &eq) != DJL_OK)
+        return set_error(err, DJL_E_INFEASIBLE, "Te", p->Te,
+                         "Te = %g s: the time scales and lengths of this motion span more than "
+                         "a double holds (%s leaves the normal doubles in units where Te and "
+                         "the distance are ordinary): it cannot be planned exactly", p->Te,
+                         eq.param);
     st = plan_in_units(&q, p, kl, plan, err, 1);
     if (st != DJL_OK) return st;
+    (void)plan_big(plan, before);
     /* back to the user's units */
     plan->p = *p;
     plan->x_target = 0.0;
@@ -848,7 +874,12 @@ static djl_status plan_scaled(const djl_params *p, int kl, int kt, djl_plan *pla
     }
     for (i = 0; i < plan->n_steps; i++) plan->step[i].A = djl_ldexp(plan->step[i].A, -ea);
     plan->piece[plan->n_pieces - 1].v = plan->v_target;
-    if (djl_isfinite(big) && !plan_clean(plan)) {
+    /* a quantity the plan has (not 0 in these units) that does not survive the way
+     * back (wholly below the normal doubles, or 0: issue 21, an acceleration of
+     * 1e-598 m/s^2 became 0 and the plan passed) */
+    (void)plan_big(plan, after);
+    for (i = 0; i < 7; i++) lost |= before[i] != 0.0 && after[i] < DJL_MIN_MAGNITUDE;
+    if (djl_isfinite(big) && (lost || !plan_clean(plan))) {
         /* values of the motion itself below the normal doubles: it is too
          * small to be planned exactly at these time scales */
         char name[40];

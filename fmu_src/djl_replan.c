@@ -49,7 +49,7 @@ static void gather(const djl_plan *old, double u, replan_state *r)
     djl_sample s;
     int32_t cur = 0;
     int i;
-    double fo = djl_floor(u);
+    double fo = djl_floor(u), amag;
     r->o = (int64_t)fo;
     r->b = r->o + 1; /* the interval [o, o + 1) that contains u is the old plan's */
     djl_eval(old, fo, &cur, &s);
@@ -65,10 +65,12 @@ static void gather(const djl_plan *old, double u, replan_state *r)
     r->v_max = old->p.v_max;
     r->a_max = old->p.a_max;
     r->d_max = old->p.d_max;
+    amag = djl_fabs(old->level0);
     for (i = 0; i < old->n_steps; i++) {
         const djl_step *st = &old->step[i];
         if (st->tau < r->b) {
             r->level += st->A;
+            amag += djl_fabs(st->A);
             if (st->N > 0 && st->tau + st->N > r->o) {
                 djl_step *k = &r->run[r->n_run++];
                 *k = *st;
@@ -80,8 +82,9 @@ static void gather(const djl_plan *old, double u, replan_state *r)
             r->a -= st->A; /* an unfiltered step at o, dropped: its jump is in s.a */
         }
     }
-    /* a rounding residue of +A - A is no acceleration */
-    if (djl_fabs(r->level) <= 1e-13 * (r->a_max + r->d_max)) r->level = 0.0;
+    /* a rounding residue of +A - A is no acceleration (relative to the levels summed, not
+     * to a_max + d_max: limits of 10^300 the motion never reaches would zero any level) */
+    if (djl_fabs(r->level) <= 1e-13 * amag) r->level = 0.0;
     /* the stage in progress: planned motions never reverse within a stage, so the
      * signs of the level and of the velocity tell an acceleration from a deceleration */
     r->speeding_up = r->level * r->v >= 0.0;
@@ -285,14 +288,31 @@ static void choose_end(const replan_state *r, transition *t, int32_t Nend, const
 static int walk(const replan_state *r, const djl_step *nw, int n_new, int64_t T, djl_plan *out,
                 double st[4]);
 
+/* The scale of the velocities a walk to T sums (m/s): the output's and the AL
+ * profile's at o and every change of velocity the level, the kept ramps and
+ * the new steps bring by T.  A velocity below 10^-12 of it is a rounding
+ * residue; the scale holds only speeds the motion reaches, never v_max itself
+ * (v_max = 10^300 must not make a real speed a residue). */
+static double v_scale(const replan_state *r, const djl_step *nw, int n_new, int64_t T)
+{
+    double s = djl_fabs(r->v) + djl_fabs(r->v_al) + djl_fabs(r->level) * r->Te * (double)T;
+    int i;
+    for (i = 0; i < r->n_run; i++) s += djl_fabs(r->run[i].A) * r->Te * (double)r->run[i].N;
+    for (i = 0; i < n_new; i++)
+        s += djl_fabs(nw[i].A) * r->Te * (double)imax2(T - nw[i].tau, nw[i].N);
+    return s;
+}
+
 /* Velocity the ramps settle to, as the pieces will have it (their walk: the
  * closed-form settle differs from it by roundings, which a stop must not leave
  * behind as a creeping speed). */
 static double settled_v(const replan_state *r, const djl_step *nw, int n_new)
 {
     double st[4];
-    (void)walk(r, nw, n_new, imax2(ramps_end(r, nw, n_new), r->b - r->o), NULL, st);
-    return djl_fabs(st[1]) <= 1e-12 * r->v_max ? 0.0 : st[1]; /* a rounding residue: at rest */
+    int64_t T = imax2(ramps_end(r, nw, n_new), r->b - r->o);
+    (void)walk(r, nw, n_new, T, NULL, st);
+    /* a rounding residue: at rest */
+    return djl_fabs(st[1]) <= 1e-12 * v_scale(r, nw, n_new, T) ? 0.0 : st[1];
 }
 
 /* A stop: the stage in progress ends, then stages 3 and 4 bring the axis to
@@ -625,7 +645,7 @@ djl_status djl_replan(const djl_plan *old, double u, const djl_goal *g, djl_plan
      * b; 2: a stop, then the new motion from rest; 3: a stop */
     for (;;) {
         djl_status s2;
-        double dist, v;
+        double dist, v, vs;
         T = ramps_end(&r, t.s, t.n);
         if (r.b - r.o > T) T = r.b - r.o; /* nothing new before b */
         (void)walk(&r, t.s, t.n, T, NULL, st); /* the state at T, as the pieces will have it */
@@ -636,11 +656,14 @@ djl_status djl_replan(const djl_plan *old, double u, const djl_goal *g, djl_plan
             break;
         }
         dist = (g->target - r.x) - st[0];
-        v = how == 2 || djl_fabs(st[1]) <= 1e-12 * r.v_max ? 0.0 : st[1]; /* at rest: rounding */
-        /* at rest within a trillionth of the positions (and of a sample's travel): arrived
-         * (a new move for a rounding residue would be all rounding itself) */
-        if (v == 0.0 &&
-            djl_fabs(dist) <= 1e-12 * (djl_fabs(g->target) + djl_fabs(r.x) + r.v_max * r.Te))
+        vs = v_scale(&r, t.s, t.n, T);
+        v = how == 2 || djl_fabs(st[1]) <= 1e-12 * vs ? 0.0 : st[1]; /* at rest: rounding */
+        /* at rest within a trillionth of the positions (and of a sample's travel at the
+         * speeds the walk sums): arrived (a new move for a rounding residue would be all
+         * rounding itself).  Only quantities the motion reaches: a tolerance growing
+         * with v_max once took a real distance of 3e-4 m for a residue (issue 21) */
+        if (v == 0.0 && djl_fabs(dist) <= 1e-12 * (djl_fabs(g->target) + djl_fabs(r.x) +
+                                                  djl_fabs(st[0]) + vs * r.Te))
             dist = 0.0;
         if (djl_fabs(dist) < DJL_MIN_MAGNITUDE) dist = 0.0;
         if (dist == 0.0 && v == 0.0) {
@@ -695,7 +718,7 @@ int djl_jerk_times_due(const djl_plan *plan, double u, double u_end, const int32
                        int allow_now, double *at)
 {
     double b = djl_floor(u) + 1.0, end = djl_floor(u_end) + 1.0, first = DJL_HUGE_VAL;
-    double level = plan->level0;
+    double level = plan->level0, amag = djl_fabs(plan->level0);
     int i, ahead = 0;
     if (!(u < u_end)) return 0;
     for (i = 0; i < plan->n_steps; i++) {
@@ -703,13 +726,14 @@ int djl_jerk_times_due(const djl_plan *plan, double u, double u_end, const int32
         double tau = (double)st->tau;
         if (tau < b) {
             level += st->A;
+            amag += djl_fabs(st->A);
         } else if (st->stage >= 1 && st->stage <= 4 && st->N != N[st->stage - 1]) {
             ahead = 1;
             if (tau < first) first = tau;
         }
     }
     if (!ahead) return 0;
-    if (djl_fabs(level) <= 1e-13 * (plan->p.a_max + plan->p.d_max)) level = 0.0;
+    if (djl_fabs(level) <= 1e-13 * amag) level = 0.0; /* a residue of +A - A (as gather) */
     if (allow_now && level != 0.0 && djl_fabs(level) >= 0.5 * plan->p.a_max) {
         /* speeding up (not slowing down)? */
         djl_sample s;

@@ -866,6 +866,8 @@ const char *model_state_flaw(const model_data *d)
     const djl_plan *pl = &d->plan;
     int32_t i, cur;
     djl_sample o;
+    double amx, alim, vlim, valim, jlim, lmax = 0.0;
+    int32_t nmin, nmax;
     if (d->planned != 0 && d->planned != 1) return "the planned flag is neither 0 nor 1";
     if (!djl_isfinite(d->start_time)) return "the start time is not finite";
     if (d->n < 0 || d->n > DJL_MAX_MOTION_SAMPLES) return "the sample counter is out of range";
@@ -883,6 +885,8 @@ const char *model_state_flaw(const model_data *d)
         return "the input target is out of range";
     if (!(djl_isfinite(d->f_mode) && d->f_mode > 0.0)) return "the input f_mode is not > 0";
     if (!d->planned) return NULL; /* the plan is rebuilt before any use */
+    if ((d->state & (MS_STEP | MS_TERMINATED)) && !(d->f_seen > 0.0))
+        return "the f_mode last seen is not > 0"; /* an f_mode accepted (model_start) */
     if (djl_validate(&d->p, NULL) != DJL_OK) return "its parameters are invalid";
     if (d->goal != 0 && d->goal != DJL_GOAL_TARGET && d->goal != DJL_GOAL_STOP)
         return "the goal of the move is unknown";
@@ -911,13 +915,22 @@ const char *model_state_flaw(const model_data *d)
     }
     if (pl->n_steps < 0 || pl->n_steps > DJL_MAX_PLAN_STEPS)
         return "the plan's step count is out of range";
-    if (!djl_isfinite(pl->level0)) return "the plan's acceleration level is not finite";
+    /* every value against the limits it obeys (issue 21: a finite level0 of -DBL_MAX
+     * passed and a stop then gave infinite outputs): a level within the larger of
+     * a_max and d_max, a step (a change of level) within their sum, up to rounding */
+    amx = djl_fmax(pl->p.a_max, pl->p.d_max);
+    alim = amx * (1.0 + 1e-9);
+    if (!(djl_fabs(pl->level0) <= alim))
+        return "the plan's acceleration level is outside the acceleration limits";
     for (i = 0; i < pl->n_steps; i++) {
         const djl_step *st = &pl->step[i];
-        if (st->tau < -DJL_MAX_MOTION_SAMPLES || st->tau > DJL_MAX_MOTION_SAMPLES ||
+        /* a motion planned up to the horizon may hold a step a few samples past it */
+        if (st->tau < -2 * DJL_MAX_MOTION_SAMPLES || st->tau > 2 * DJL_MAX_MOTION_SAMPLES ||
             !djl_isfinite(st->A) || st->N < 0 || st->N > DJL_MAX_FILTER_SAMPLES ||
             st->stage < 0 || st->stage > 4)
             return "a step of the plan is out of range";
+        if (!(djl_fabs(st->A) <= (pl->p.a_max + pl->p.d_max) * (1.0 + 1e-9)))
+            return "a step of the plan is outside the acceleration limits";
     }
     if (!djl_isfinite(d->t_start)) return "t_start is not finite";
     if (!djl_isfinite(d->offset) || djl_fabs(d->offset) > 1e15 || d->offset != djl_floor(d->offset))
@@ -931,10 +944,38 @@ const char *model_state_flaw(const model_data *d)
     for (i = 0; i < 4; i++)
         if (pl->N[i] < 0 || pl->N[i] > DJL_MAX_FILTER_SAMPLES)
             return "a jerk time in samples is out of range";
+    vlim = pl->p.v_max * (1.0 + 1e-9);
     if (!djl_isfinite(pl->x_target) || !djl_isfinite(pl->v_target) ||
         !djl_isfinite(pl->v_reached) || !djl_isfinite(pl->a_reached) ||
         !djl_isfinite(pl->d_reached))
         return "a value of the plan is not finite";
+    if (!(djl_fabs(pl->x_target) <= 2.0 * DJL_MAX_POSITION && djl_fabs(pl->v_target) <= vlim &&
+          djl_fabs(pl->v_reached) <= vlim && djl_fabs(pl->a_reached) <= alim &&
+          djl_fabs(pl->d_reached) <= alim))
+        return "a value of the plan is outside its limits";
+    /* v_max up to the rounding a piece of L seconds accumulates (tests/c/test_core.c) */
+    for (i = 0; i + 1 < pl->n_pieces; i++)
+        /* in doubles: the pieces' order is checked below (found by fuzz_state: int64_t
+         * differences of forged indices overflowed) */
+        lmax = djl_fmax(lmax, ((double)pl->piece[i + 1].k - (double)pl->piece[i].k) * pl->p.Te);
+    vlim += 4.0 * 2.220446049250313e-16 * amx * lmax;
+    /* the jerk: a sum of the ramps running (each A / (N Te)), of the steps listed, or of
+     * stages of the plan's jerk times within the limits */
+    nmin = 0;
+    for (i = 0; i < 4; i++)
+        if (pl->N[i] > 0 && (nmin == 0 || pl->N[i] < nmin)) nmin = pl->N[i];
+    jlim = nmin > 0 ? 2.0 * amx / ((double)nmin * pl->p.Te) : 0.0;
+    nmax = 1;
+    for (i = 0; i < 4; i++) nmax = pl->N[i] > nmax ? pl->N[i] : nmax;
+    for (i = 0; i < pl->n_steps; i++)
+        if (pl->step[i].N > 0) {
+            jlim += djl_fabs(pl->step[i].A) / ((double)pl->step[i].N * pl->p.Te);
+            nmax = pl->step[i].N > nmax ? pl->step[i].N : nmax;
+        }
+    jlim *= 1.0 + 1e-9;
+    /* the AL profile leads the output by up to a jerk time: a replan's transition may take
+     * it past v_max while the output settles within */
+    valim = vlim + 2.0 * alim * pl->p.Te * (double)nmax;
     for (i = 0; i < pl->n_pieces; i++) {
         const djl_piece *pc = &pl->piece[i];
         double v[7];
@@ -945,6 +986,11 @@ const char *model_state_flaw(const model_data *d)
         if (pc->seg < 0 || pc->seg > pl->n_segments) return "a piece's segment is out of range";
         if (pc->stage < 0 || pc->stage > 4) return "a piece's stage is out of range";
         if (!finite_all(v, 7)) return "a piece of the plan is not finite";
+        if (!(djl_fabs(pc->x) <= 2.0 * DJL_MAX_POSITION &&
+              djl_fabs(pc->x_al) <= 2.0 * DJL_MAX_POSITION && djl_fabs(pc->v) <= vlim &&
+              djl_fabs(pc->v_al) <= valim && djl_fabs(pc->a) <= alim && djl_fabs(pc->a_al) <= alim &&
+              djl_fabs(pc->j) <= jlim))
+            return "a piece of the plan is outside the limits";
     }
     /* the shaper is the one of its parameters, its memory sound */
     {

@@ -37,18 +37,33 @@ def fmu_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return tmp_path_factory.mktemp("fmus")
 
 
+def _extra_cflags(fmi_version: int) -> tuple[str, ...]:
+    """Extra flags for the session's FMU binaries from ``DJL_TEST_FMU_CFLAGS``.
+
+    ``{fmi}`` is replaced by the FMI version; tests/c/coverage.sh builds them with
+    ``--coverage -dumpdir DIR/fmu{fmi}/`` (empty, the default: the FMU as shipped).  With
+    extra flags the host binary is built by gcc (its coverage runtime is linked in).
+    """
+    flags = os.environ.get("DJL_TEST_FMU_CFLAGS", "").replace("{fmi}", str(fmi_version))
+    return tuple(flags.split())
+
+
 @pytest.fixture(scope="session")
 def fmu2(fmu_dir: Path) -> Path:
     from harness.fmu.build import build_fmu
 
-    return build_fmu(2, fmu_dir / "JerkLimitedTrajectory-fmi2.fmu")
+    extra = _extra_cflags(2)
+    return build_fmu(2, fmu_dir / "JerkLimitedTrajectory-fmi2.fmu", extra_cflags=extra,
+                     cc="gcc" if extra else None)
 
 
 @pytest.fixture(scope="session")
 def fmu3(fmu_dir: Path) -> Path:
     from harness.fmu.build import build_fmu
 
-    return build_fmu(3, fmu_dir / "JerkLimitedTrajectory-fmi3.fmu")
+    extra = _extra_cflags(3)
+    return build_fmu(3, fmu_dir / "JerkLimitedTrajectory-fmi3.fmu", extra_cflags=extra,
+                     cc="gcc" if extra else None)
 
 
 @pytest.fixture(scope="session")

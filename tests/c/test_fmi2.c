@@ -3,6 +3,7 @@
  * under AddressSanitizer + UBSan or valgrind: normal run, FMU state save /
  * restore / serialise, every kind of bad call, reset, two instances.
  */
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -516,6 +517,17 @@ static void run_forged_states(void)
     FORGE(d.p.v_max = 2.0, "not made from its parameters");
     FORGE(d.out.x += 1e-9, "outputs are not those of its plan");
     FORGE(d.planned = 0, "without a plan");
+    /* issue 21: finite but beyond the limits it obeys (level0 = -DBL_MAX and a stop once
+     * gave infinite outputs after OK) */
+    FORGE(d.plan.level0 = -DBL_MAX, "acceleration level is outside the acceleration limits");
+    FORGE(d.plan.level0 = 1.5 * d.p.a_max, "acceleration level is outside");
+    FORGE(d.plan.step[0].A = 1e300, "step of the plan is outside the acceleration limits");
+    FORGE(d.plan.piece[d.plan.n_pieces - 2].j = 1e300, "outside the limits");
+    FORGE(d.plan.piece[d.plan.n_pieces - 2].v = 2.0 * d.p.v_max, "outside the limits");
+    FORGE(d.plan.piece[d.plan.n_pieces - 2].a = -DBL_MAX, "outside the limits");
+    FORGE(d.plan.piece[d.plan.n_pieces - 1].x = 1e305, "outside the limits");
+    FORGE(d.plan.v_reached = 1e300, "outside its limits");
+    FORGE(d.f_seen = -1.0, "f_mode last seen");
     /* unchecked: the checksum alone */
     memcpy(&d, buf, sizeof d);
     d.plan.seg[0].frac += 1.0;
@@ -631,6 +643,197 @@ static void run_commands(int jerk_source)
     fmi2FreeInstance(c);
 }
 
+/* Every entry point of the FMI 2 API that this co-simulation FMU does not provide, and
+ * the status getters: each refuses with fmi2Error and a message naming it (the
+ * instance then in the Error state, Reset brings it back), or answers as the standard
+ * says; the version strings; Instantiate's refusals (issue 21: found uncovered). */
+static void run_entry_points(void)
+{
+    fmi2Component c = ready("entry");
+    fmi2ValueReference vr = VR_X;
+    fmi2Real r = 0.0;
+    fmi2Integer i = 0;
+    fmi2Boolean b = fmi2True;
+    fmi2Status st = fmi2Error;
+    fmi2String str = "x";
+    fmi2EventInfo ev;
+    fmi2CallbackFunctions nolog = {NULL, calloc, free, NULL, NULL};
+    CHECK(strcmp(fmi2GetVersion(), "2.0") == 0, "version %s", fmi2GetVersion());
+    CHECK(strcmp(fmi2GetTypesPlatform(), "default") == 0, "types platform");
+    CHECK(fmi2GetStatus(c, fmi2DoStepStatus, &st) == fmi2OK && st == fmi2OK, "status");
+    CHECK(fmi2GetBooleanStatus(c, fmi2Terminated, &b) == fmi2OK && b == fmi2False, "terminated");
+    CHECK(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &r) == fmi2OK && r == 0.0, "last time");
+    CHECK(fmi2GetString(c, &vr, 0, &str) == fmi2OK && fmi2SetString(c, &vr, 0, &str) == fmi2OK,
+          "no strings asked");
+    CHECK(fmi2SetRealInputDerivatives(c, &vr, 0, &i, &r) == fmi2OK &&
+          fmi2GetRealOutputDerivatives(c, &vr, 0, &i, &r) == fmi2OK, "no derivatives asked");
+#define REFUSED(call, fragment)                                                                  \
+    do {                                                                                         \
+        expect_error(call, fragment);                                                            \
+        CHECK(fmi2Reset(c) == fmi2OK, "reset after %s", fragment);                              \
+        CHECK(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) == fmi2OK &&          \
+              fmi2EnterInitializationMode(c) == fmi2OK &&                                        \
+              fmi2ExitInitializationMode(c) == fmi2OK, "init after %s", fragment);                \
+    } while (0)
+    REFUSED(fmi2GetRealStatus(c, fmi2DoStepStatus, &r), "only fmi2LastSuccessfulTime");
+    REFUSED(fmi2GetBooleanStatus(c, fmi2DoStepStatus, &b), "only fmi2Terminated");
+    REFUSED(fmi2GetIntegerStatus(c, fmi2DoStepStatus, &i), "no integer status");
+    REFUSED(fmi2GetStringStatus(c, fmi2DoStepStatus, &str), "no string status");
+    REFUSED(fmi2CancelStep(c), "never returns fmi2Pending");
+    REFUSED(fmi2GetString(c, &vr, 1, &str), "has no String");
+    REFUSED(fmi2SetString(c, &vr, 1, &str), "has no String");
+    REFUSED(fmi2SetRealInputDerivatives(c, &vr, 1, &i, &r), "input derivatives are not used");
+    REFUSED(fmi2GetRealOutputDerivatives(c, &vr, 1, &i, &r), "fmi2GetRealOutputDerivatives");
+    REFUSED(fmi2GetDirectionalDerivative(c, &vr, 1, &vr, 1, &r, &r), "co-simulation only");
+    REFUSED(fmi2EnterEventMode(c), "fmi2EnterEventMode is not supported");
+    REFUSED(fmi2NewDiscreteStates(c, &ev), "fmi2NewDiscreteStates is not supported");
+    REFUSED(fmi2EnterContinuousTimeMode(c), "fmi2EnterContinuousTimeMode is not supported");
+    REFUSED(fmi2CompletedIntegratorStep(c, fmi2True, &b, &b), "fmi2CompletedIntegratorStep");
+    REFUSED(fmi2SetTime(c, 0.0), "fmi2SetTime is not supported");
+    REFUSED(fmi2SetContinuousStates(c, &r, 1), "fmi2SetContinuousStates is not supported");
+    REFUSED(fmi2GetDerivatives(c, &r, 1), "fmi2GetDerivatives is not supported");
+    REFUSED(fmi2GetEventIndicators(c, &r, 1), "fmi2GetEventIndicators is not supported");
+    REFUSED(fmi2GetContinuousStates(c, &r, 1), "fmi2GetContinuousStates is not supported");
+    REFUSED(fmi2GetNominalsOfContinuousStates(c, &r, 1), "fmi2GetNominalsOfContinuousStates");
+#undef REFUSED
+    CHECK(fmi2EnterEventMode(NULL) == fmi2Error, "NULL instance");
+    /* debug logging: every category (none named), an unknown one (a warning) */
+    CHECK(fmi2SetDebugLogging(c, fmi2True, 0, NULL) == fmi2OK, "logging on");
+    {
+        fmi2String cats[1] = {"noSuchCategory"};
+        /* (the warning is a logStatusWarning message: filtered out, as only the named,
+         * unknown, category is on) */
+        CHECK(fmi2SetDebugLogging(c, fmi2True, 1, cats) == fmi2Warning, "unknown category");
+    }
+    /* a damaged state given to be overwritten (get) or filled (deserialise): refused */
+    {
+        fmi2FMUstate s = NULL, s2 = NULL;
+        size_t size = 0;
+        fmi2Byte *buf;
+        CHECK(fmi2GetFMUstate(c, &s) == fmi2OK, "get");
+        CHECK(fmi2SerializedFMUstateSize(c, s, &size) == fmi2OK, "size");
+        buf = (fmi2Byte *)malloc(size);
+        CHECK(fmi2SerializeFMUstate(c, s, buf, size) == fmi2OK, "serialize");
+        ((model_data *)s)->n += 1; /* the checksum no longer holds */
+        s2 = s;
+        expect_error(fmi2GetFMUstate(c, &s2), "state to overwrite");
+        CHECK(fmi2Reset(c) == fmi2OK && fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0) == fmi2OK &&
+              fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) == fmi2OK,
+              "init");
+        expect_error(fmi2DeSerializeFMUstate(c, buf, size, &s2), "state to overwrite");
+        CHECK(fmi2Reset(c) == fmi2OK && fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0) == fmi2OK &&
+              fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) == fmi2OK,
+              "init");
+        fmi2FreeFMUstate(c, &s);
+        free(buf);
+    }
+    /* the outputs read with a parameter (the general path, not the per-step fast one),
+     * and each read first in initialisation mode (before the plan exists): the same values */
+    {
+        fmi2ValueReference outs[8] = {VR_X, VR_V, VR_A, VR_J, VR_X_AL, VR_V_AL, VR_A_AL, VR_TE};
+        double mixed[8], one;
+        int k;
+        CHECK(fmi2DoStep(c, 0.0, 0.05, fmi2True) == fmi2OK, "step");
+        CHECK(fmi2GetReal(c, outs, 8, mixed) == fmi2OK, "mixed read");
+        for (k = 0; k < 7; k++)
+            CHECK(fmi2GetReal(c, &outs[k], 1, &one) == fmi2OK && one == mixed[k], "output %d", k);
+        for (k = 0; k < 7; k++) {
+            CHECK(fmi2Reset(c) == fmi2OK && fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0) == fmi2OK &&
+                  fmi2EnterInitializationMode(c) == fmi2OK, "init");
+            CHECK(fmi2GetReal(c, &outs[k], 1, &one) == fmi2OK && isfinite(one) &&
+                  (k != 0 || one == 0.0), "output %d at the start: %g", k, one);
+            CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit");
+        }
+    }
+    still_usable(c, 0.0);
+    fmi2FreeInstance(c);
+    /* Instantiate: an empty name, model exchange, another GUID: NULL, with a message */
+    last_message[0] = '\0';
+    CHECK(fmi2Instantiate("", fmi2CoSimulation, DJL_INSTANTIATION_TOKEN, "", &cb, 0, 0) == NULL &&
+          strstr(last_message, "non-empty") != NULL, "empty name: %s", last_message);
+    CHECK(fmi2Instantiate("me", fmi2ModelExchange, DJL_INSTANTIATION_TOKEN, "", &cb, 0, 0) ==
+          NULL && strstr(last_message, "co-simulation only") != NULL, "model exchange");
+    CHECK(fmi2Instantiate("g", fmi2CoSimulation, "{0}", "", &cb, 0, 0) == NULL &&
+          strstr(last_message, "GUID") != NULL, "GUID");
+    CHECK(fmi2Instantiate("", fmi2CoSimulation, DJL_INSTANTIATION_TOKEN, "", &nolog, 0, 0) ==
+          NULL, "without a logger");
+}
+
+/* Issue 21 (A): a replanned move reported done off its target when v_max was huge (the
+ * arrival tolerance grew with v_max Te).  Steps of 0.4 s, then on to rest: done only on
+ * the target, to a few ulps. */
+static double land_on(fmi2Component c, double target, double t, const char *what)
+{
+    int k;
+    double x;
+    k = 0;
+    do { /* at least one step: a command acts from the next */
+        CHECK(fmi2DoStep(c, t, 0.4, fmi2True) == fmi2OK, "%s: step: %s", what, last_message);
+        t += 0.4;
+    } while (++k < 200 && !get_bool(c, VR_DONE));
+    x = get_real(c, VR_X);
+    CHECK(get_bool(c, VR_DONE) && !get_bool(c, VR_BUSY) && get_real(c, VR_V) == 0.0 &&
+              get_real(c, VR_A) == 0.0, "%s: not at rest", what);
+    CHECK(fabs(x - target) <= 4.0 * DBL_EPSILON * fabs(target), "%s: done at x = %.17g, not %.17g",
+          what, x, target);
+    return t;
+}
+
+static void run_issue21_landing(void)
+{
+    static const double targets[2] = {7e-4, 16.0};
+    fmi2Component c;
+    fmi2ValueReference vjs = VR_JERK_SOURCE, vp = VR_PROFILE;
+    fmi2Integer three = 3, al = 1;
+    double t;
+    int i;
+    /* the default move with v_max = 1e300, a new target with an execute edge, one step */
+    for (i = 0; i < 2; i++) {
+        c = make("issue21-a");
+        set_real(c, VR_V_MAX, 1e300);
+        CHECK(fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) == fmi2OK,
+              "init");
+        set_real(c, VR_TARGET, targets[i]);
+        set_bool(c, VR_EXECUTE, 1);
+        CHECK(fmi2DoStep(c, 0.0, 0.4, fmi2True) == fmi2OK, "step: %s", last_message);
+        CHECK(!get_bool(c, VR_DONE) || fabs(get_real(c, VR_X) - targets[i]) <= 1e-18 +
+              4.0 * DBL_EPSILON * targets[i], "done off the target: x = %.17g",
+              get_real(c, VR_X));
+        land_on(c, targets[i], 0.4, i ? "v_max 1e300, target 16" : "v_max 1e300, target 7e-4");
+        fmi2FreeInstance(c);
+    }
+    /* jerk_source 3, f_mode changed, no command: the parametric 0.3 m move (rested at 0.105
+     * or 0.119 before) */
+    c = make("issue21-js3");
+    CHECK(fmi2SetInteger(c, &vjs, 1, &three) == fmi2OK, "jerk_source");
+    set_real(c, VR_DISTANCE, 0.3);
+    set_real(c, VR_V_MAX, 1e300);
+    CHECK(fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) == fmi2OK,
+          "init");
+    set_real(c, VR_F_MODE, 5.0);
+    CHECK(fmi2DoStep(c, 0.0, 0.05, fmi2True) == fmi2OK, "step");
+    set_real(c, VR_F_MODE, 13.0);
+    land_on(c, 0.3, 0.05, "jerk_source 3, f_mode 5 -> 13");
+    fmi2FreeInstance(c);
+    /* AL, v_max = 3.4e9: a new target in the middle of the move, then one 3e-8 m past the
+     * rest (taken for arrived before: 3e-8 < 1e-12 v_max Te) */
+    c = make("issue21-al");
+    CHECK(fmi2SetInteger(c, &vp, 1, &al) == fmi2OK, "AL");
+    set_real(c, VR_V_MAX, 3.4e9);
+    CHECK(fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) == fmi2OK,
+          "init");
+    CHECK(fmi2DoStep(c, 0.0, 0.1, fmi2True) == fmi2OK, "step");
+    set_real(c, VR_TARGET, 0.05);
+    set_bool(c, VR_EXECUTE, 1);
+    t = land_on(c, 0.05, 0.1, "AL, v_max 3.4e9, target 0.05");
+    set_bool(c, VR_EXECUTE, 0);
+    CHECK(fmi2DoStep(c, t, 0.1, fmi2True) == fmi2OK, "step: %s", last_message);
+    set_real(c, VR_TARGET, 0.05 + 3e-8);
+    set_bool(c, VR_EXECUTE, 1);
+    land_on(c, 0.05 + 3e-8, t + 0.1, "AL, v_max 3.4e9, 3e-8 m on");
+    fmi2FreeInstance(c);
+}
+
 int main(int argc, char **argv)
 {
     /* argv[1]: corruptions of a serialized state (10^6 for the full campaign of
@@ -644,6 +847,8 @@ int main(int argc, char **argv)
     run_forged_states();
     run_commands(2);
     run_commands(3);
+    run_issue21_landing();
+    run_entry_points();
     run_state_fuzz(n_fuzz, n_sealed);
     printf("fmi2: %d failures, %d errors logged\n", failures, errors_logged);
     return failures ? 1 : 0;

@@ -413,6 +413,133 @@ static void run_shaper(void)
     fmi3FreeInstance(c);
 }
 
+/* Every entry point of the FMI 3 API that this co-simulation FMU does not provide: each
+ * refuses with fmi3Error and a message naming it (Reset brings the instance back); the
+ * types it has no variables of refuse any value reference; Instantiate's refusals
+ * (issue 21: found uncovered). */
+static void run_entry_points(void)
+{
+    fmi3Instance c = ready("entry");
+    fmi3ValueReference vr = VR_X;
+    fmi3Float64 r = 0.0;
+    fmi3Float32 f32 = 0.0f;
+    fmi3Int8 i8 = 0;
+    fmi3UInt8 u8 = 0;
+    fmi3Int16 i16 = 0;
+    fmi3UInt16 u16 = 0;
+    fmi3UInt32 u32 = 0;
+    fmi3UInt64 u64 = 0;
+    fmi3Int32 order = 1;
+    fmi3String str = "x";
+    fmi3Boolean b = fmi3False;
+    fmi3IntervalQualifier q;
+    CHECK(strcmp(fmi3GetVersion(), "3.0") == 0, "version %s", fmi3GetVersion());
+#define REFUSED(call, fragment)                                                                  \
+    do {                                                                                         \
+        expect_error(call, fragment);                                                            \
+        CHECK(fmi3Reset(c) == fmi3OK, "reset after %s", fragment);                              \
+        CHECK(fmi3EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3False, 0.0) == fmi3OK &&  \
+              fmi3ExitInitializationMode(c) == fmi3OK, "init after %s", fragment);                \
+    } while (0)
+    REFUSED(fmi3GetFloat32(c, &vr, 1, &f32, 1), "fmi3GetFloat32: value reference");
+    REFUSED(fmi3GetInt8(c, &vr, 1, &i8, 1), "fmi3GetInt8: value reference");
+    REFUSED(fmi3GetUInt8(c, &vr, 1, &u8, 1), "fmi3GetUInt8: value reference");
+    REFUSED(fmi3GetInt16(c, &vr, 1, &i16, 1), "fmi3GetInt16: value reference");
+    REFUSED(fmi3GetUInt16(c, &vr, 1, &u16, 1), "fmi3GetUInt16: value reference");
+    REFUSED(fmi3GetUInt32(c, &vr, 1, &u32, 1), "fmi3GetUInt32: value reference");
+    REFUSED(fmi3GetString(c, &vr, 1, &str, 1), "fmi3GetString: value reference");
+    REFUSED(fmi3SetInt8(c, &vr, 1, &i8, 1), "fmi3SetInt8: value reference");
+    REFUSED(fmi3SetUInt8(c, &vr, 1, &u8, 1), "fmi3SetUInt8: value reference");
+    REFUSED(fmi3SetInt16(c, &vr, 1, &i16, 1), "fmi3SetInt16: value reference");
+    REFUSED(fmi3SetUInt16(c, &vr, 1, &u16, 1), "fmi3SetUInt16: value reference");
+    REFUSED(fmi3SetUInt32(c, &vr, 1, &u32, 1), "fmi3SetUInt32: value reference");
+    REFUSED(fmi3SetUInt64(c, &vr, 1, &u64, 1), "fmi3SetUInt64: value reference");
+    REFUSED(fmi3EnterEventMode(c), "fmi3EnterEventMode is not supported");
+    REFUSED(fmi3GetDirectionalDerivative(c, &vr, 1, &vr, 1, &r, 1, &r, 1),
+            "fmi3GetDirectionalDerivative is not supported");
+    REFUSED(fmi3GetAdjointDerivative(c, &vr, 1, &vr, 1, &r, 1, &r, 1),
+            "fmi3GetAdjointDerivative is not supported");
+    REFUSED(fmi3EnterConfigurationMode(c), "fmi3EnterConfigurationMode is not supported");
+    REFUSED(fmi3ExitConfigurationMode(c), "fmi3ExitConfigurationMode is not supported");
+    REFUSED(fmi3GetIntervalDecimal(c, &vr, 1, &r, &q), "fmi3GetIntervalDecimal is not");
+    REFUSED(fmi3GetIntervalFraction(c, &vr, 1, &u64, &u64, &q), "fmi3GetIntervalFraction is");
+    REFUSED(fmi3GetShiftDecimal(c, &vr, 1, &r), "fmi3GetShiftDecimal is not supported");
+    REFUSED(fmi3GetShiftFraction(c, &vr, 1, &u64, &u64), "fmi3GetShiftFraction is not");
+    REFUSED(fmi3SetIntervalDecimal(c, &vr, 1, &r), "fmi3SetIntervalDecimal is not supported");
+    REFUSED(fmi3SetIntervalFraction(c, &vr, 1, &u64, &u64), "fmi3SetIntervalFraction is not");
+    REFUSED(fmi3SetShiftDecimal(c, &vr, 1, &r), "fmi3SetShiftDecimal is not supported");
+    REFUSED(fmi3SetShiftFraction(c, &vr, 1, &u64, &u64), "fmi3SetShiftFraction is not");
+    REFUSED(fmi3EvaluateDiscreteStates(c), "fmi3EvaluateDiscreteStates is not supported");
+    REFUSED(fmi3UpdateDiscreteStates(c, &b, &b, &b, &b, &b, &r), "fmi3UpdateDiscreteStates is");
+    REFUSED(fmi3EnterContinuousTimeMode(c), "fmi3EnterContinuousTimeMode is not supported");
+    REFUSED(fmi3CompletedIntegratorStep(c, fmi3True, &b, &b), "fmi3CompletedIntegratorStep is");
+    REFUSED(fmi3SetTime(c, 0.0), "fmi3SetTime is not supported");
+    REFUSED(fmi3SetContinuousStates(c, &r, 1), "fmi3SetContinuousStates is not supported");
+    REFUSED(fmi3GetContinuousStateDerivatives(c, &r, 1), "fmi3GetContinuousStateDerivatives");
+    REFUSED(fmi3GetEventIndicators(c, &r, 1), "fmi3GetEventIndicators is not supported");
+    REFUSED(fmi3GetContinuousStates(c, &r, 1), "fmi3GetContinuousStates is not supported");
+    REFUSED(fmi3GetNominalsOfContinuousStates(c, &r, 1), "fmi3GetNominalsOfContinuousStates");
+    REFUSED(fmi3EnterStepMode(c), "fmi3EnterStepMode is not supported");
+    REFUSED(fmi3GetOutputDerivatives(c, &vr, 1, &order, &r, 1), "fmi3GetOutputDerivatives is");
+    REFUSED(fmi3ActivateModelPartition(c, vr, 0.0), "fmi3ActivateModelPartition is not");
+    CHECK(fmi3EnterEventMode(NULL) == fmi3Error, "NULL instance");
+    {
+        size_t n = 7, sz = 1;
+        fmi3Binary bin = NULL;
+        fmi3FMUState s = NULL, s2 = NULL;
+        fmi3Byte *buf;
+        fmi3String cats[1] = {"noSuchCategory"};
+        CHECK(fmi3GetNumberOfEventIndicators(c, &n) == fmi3OK && n == 0, "event indicators");
+        n = 7;
+        CHECK(fmi3GetNumberOfContinuousStates(c, &n) == fmi3OK && n == 0, "continuous states");
+        REFUSED(fmi3SetBinary(c, &vr, 1, &sz, (const fmi3Binary *)&bin, 1),
+                "fmi3SetBinary: value reference");
+        CHECK(fmi3SetDebugLogging(c, fmi3True, 0, NULL) == fmi3OK, "logging on");
+        CHECK(fmi3SetDebugLogging(c, fmi3True, 1, cats) == fmi3Warning, "unknown category");
+        /* a damaged state to overwrite or fill, a buffer too small: refused */
+        CHECK(fmi3GetFMUState(c, &s) == fmi3OK, "get");
+        CHECK(fmi3SerializedFMUStateSize(c, s, &sz) == fmi3OK, "size");
+        buf = (fmi3Byte *)malloc(sz);
+        REFUSED(fmi3SerializeFMUState(c, s, buf, sz - 1), "buffer of");
+        CHECK(fmi3SerializeFMUState(c, s, buf, sz) == fmi3OK, "serialize");
+        ((char *)s)[sz - 1] ^= 1; /* the checksum no longer holds */
+        s2 = s;
+        REFUSED(fmi3GetFMUState(c, &s2), "state to overwrite");
+        REFUSED(fmi3SerializeFMUState(c, s, buf, sz), "checksum");
+        REFUSED(fmi3DeserializeFMUState(c, buf, sz, &s2), "state to overwrite");
+        fmi3FreeFMUState(c, &s);
+        free(buf);
+    }
+#undef REFUSED
+    still_usable(c);
+    fmi3FreeInstance(c);
+    /* Instantiate: refusals, NULL with a message */
+    last_message[0] = '\0';
+    CHECK(fmi3InstantiateModelExchange("me", DJL_INSTANTIATION_TOKEN, "", fmi3False, fmi3False,
+                                       NULL, log_message) == NULL &&
+          strstr(last_message, "co-simulation only") != NULL, "model exchange: %s", last_message);
+    last_message[0] = '\0';
+    CHECK(fmi3InstantiateScheduledExecution("se", DJL_INSTANTIATION_TOKEN, "", fmi3False,
+                                            fmi3False, NULL, log_message, NULL, NULL, NULL) ==
+          NULL && strstr(last_message, "co-simulation only") != NULL, "scheduled execution");
+    last_message[0] = '\0';
+    CHECK(fmi3InstantiateCoSimulation("", DJL_INSTANTIATION_TOKEN, "", fmi3False, fmi3False,
+                                      fmi3False, fmi3False, NULL, 0, NULL, log_message, NULL) ==
+          NULL && strstr(last_message, "non-empty") != NULL, "empty name");
+    CHECK(fmi3InstantiateCoSimulation("t", "{0}", "", fmi3False, fmi3False, fmi3False, fmi3False,
+                                      NULL, 0, NULL, log_message, NULL) == NULL &&
+          strstr(last_message, "instantiation token") != NULL, "token");
+    CHECK(fmi3InstantiateCoSimulation("e", DJL_INSTANTIATION_TOKEN, "", fmi3False, fmi3False,
+                                      fmi3True, fmi3False, NULL, 0, NULL, log_message, NULL) ==
+          NULL && strstr(last_message, "eventModeUsed") != NULL, "event mode");
+    CHECK(fmi3InstantiateCoSimulation("i", DJL_INSTANTIATION_TOKEN, "", fmi3False, fmi3False,
+                                      fmi3False, fmi3False, &vr, 1, NULL, log_message, NULL) ==
+          NULL && strstr(last_message, "intermediate") != NULL, "intermediate variables");
+    CHECK(fmi3InstantiateCoSimulation("", DJL_INSTANTIATION_TOKEN, "", fmi3False, fmi3False,
+                                      fmi3False, fmi3False, NULL, 0, NULL, NULL, NULL) == NULL,
+          "without a logger");
+}
+
 int main(void)
 {
     run_shaper();
@@ -421,6 +548,7 @@ int main(void)
     run_bad_inputs();
     run_null_pointers();
     run_dependencies();
+    run_entry_points();
     printf("fmi3: %d failures\n", failures);
     return failures ? 1 : 0;
 }

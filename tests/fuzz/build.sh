@@ -1,0 +1,27 @@
+#!/bin/sh
+# Builds the fuzz harnesses of tests/fuzz/ with libFuzzer, AddressSanitizer and UBSan
+# (clang; Debian: apt-get install clang libclang-rt-14-dev), into $OUT (default
+# /tmp/djl-fuzz): fuzz_fmi, fuzz_state, fuzz_plan.  The fuzzers are tools run on
+# demand, not part of the suite (tests/test_fuzz_corpus.py replays the corpus with
+# gcc).  Run one at a time, e.g. (docs/generator.md, "Fuzzing"):
+#
+#   tests/fuzz/build.sh && nice -n 15 /tmp/djl-fuzz/fuzz_fmi -max_total_time=1800 \
+#       -dict=tests/fuzz/fmi.dict /tmp/djl-fuzz/corpus_fmi tests/fuzz/corpus/fmi
+set -eu
+cd "$(dirname "$0")/../.."
+OUT=${OUT:-/tmp/djl-fuzz}
+CC=${CC:-clang}
+FMI=$(python -c 'from harness.fmu.build import fmi_include_dir; print(fmi_include_dir())')
+mkdir -p "$OUT"
+FLAGS="-std=c99 -g -O1 -Wall -Wextra -Wpedantic -Werror -Ifmu_src -I$FMI
+       -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
+CORE="fmu_src/djl_validate.c fmu_src/djl_segment.c fmu_src/djl_motion.c fmu_src/djl_replan.c
+      fmu_src/djl_eval.c fmu_src/djl_shaper.c"
+FMU="fmu_src/fmu_base.c fmu_src/fmu_model.c fmu_src/fmu_instance.c"
+# shellcheck disable=SC2086
+$CC $FLAGS tests/fuzz/fuzz_fmi.c fmu_src/fmi2.c fmu_src/fmi3.c $FMU $CORE -lm -o "$OUT/fuzz_fmi"
+# shellcheck disable=SC2086
+$CC $FLAGS tests/fuzz/fuzz_state.c fmu_src/fmi2.c $FMU $CORE -lm -o "$OUT/fuzz_state"
+# shellcheck disable=SC2086
+$CC $FLAGS tests/fuzz/fuzz_plan.c $CORE -lm -o "$OUT/fuzz_plan"
+echo "built $OUT/fuzz_fmi $OUT/fuzz_state $OUT/fuzz_plan"

@@ -1,0 +1,549 @@
+/*
+ * fuzz_fmi.c -- FMI 2 and FMI 3 call sequences decoded from bytes (issue 21).
+ *
+ * The first byte picks the layer; then each operation is a byte and its arguments:
+ * instantiate (again), set any variable (any value reference, also unknown ones and the
+ * wrong type) to any value, enter / exit initialisation, steps of any size from any
+ * point, getters, FMU state get / set / free / serialise / deserialise (a copy, or a
+ * forged one: a word changed and the checksum recomputed), reset, terminate, commands
+ * (target + execute edge, stop edge, f_mode), debug logging.
+ *
+ * Invariants checked after every call (a broken one aborts):
+ *  - every getter of an output, a calculated parameter or the time that answers OK gives
+ *    finite values (a parameter reads back what was set: it is validated at
+ *    initialisation);
+ *  - in Step Mode after an OK step: |v| <= v_max, a within the larger of a_max and d_max,
+ *    times the sum of the shaper's |amplitudes| (a custom shaper may overshoot), up to
+ *    rounding; done == !busy;
+ *  - a move the harness can follow (from initialisation, commands decoded as the FMU
+ *    sees them, no state restored) that reports done rests on its goal: the parametric
+ *    end (x0 + distances) when it ends at rest, a commanded target, at rest after a stop;
+ *  - a state the FMU saved itself is accepted back (set, serialise, deserialise) and
+ *    restores the outputs it was saved with.
+ * Built with clang -fsanitize=fuzzer,address,undefined (tests/fuzz/build.sh) or, without
+ * a fuzzer, with gcc and tests/fuzz/replay.c (the suite replays the corpus).
+ */
+#define DJL_VARS_TABLES
+#include "djl_vars.h"
+#include "fmi2Functions.h"
+#include "fmi3Functions.h"
+#include "fmu_instance.h"
+#include "fuzz_common.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+/* ------------------------------------------------------------------ the two layers */
+
+typedef struct {
+    int v3;
+    fmi2Component c2;
+    fmi3Instance c3;
+    void *state[2];
+} fmu;
+
+static char last_msg[512]; /* the FMU's last log message, for a broken invariant's report */
+
+static void log2_cb(fmi2ComponentEnvironment e, fmi2String n, fmi2Status s, fmi2String c,
+                    fmi2String m, ...)
+{
+    (void)e;
+    (void)n;
+    (void)s;
+    (void)c;
+    FUZZ_CHECK(m != NULL && strlen(m) < 4096, "log message");
+    strncpy(last_msg, m, sizeof last_msg - 1);
+}
+
+static void log3_cb(fmi3InstanceEnvironment e, fmi3Status s, fmi3String c, fmi3String m)
+{
+    (void)e;
+    (void)s;
+    (void)c;
+    FUZZ_CHECK(m != NULL && strlen(m) < 4096, "log message");
+    strncpy(last_msg, m, sizeof last_msg - 1);
+}
+
+static const fmi2CallbackFunctions cb2 = {log2_cb, calloc, free, NULL, NULL};
+
+static int instantiate(fmu *f, int logging)
+{
+    if (f->v3) {
+        f->c3 = fmi3InstantiateCoSimulation("fuzz", DJL_INSTANTIATION_TOKEN, "/tmp", fmi3False,
+                                            logging ? fmi3True : fmi3False, fmi3False, fmi3False,
+                                            NULL, 0, NULL, log3_cb, NULL);
+        return f->c3 != NULL;
+    }
+    f->c2 = fmi2Instantiate("fuzz", fmi2CoSimulation, DJL_INSTANTIATION_TOKEN, "file:///tmp",
+                            &cb2, fmi2False, logging ? fmi2True : fmi2False);
+    return f->c2 != NULL;
+}
+
+static void free_states(fmu *f)
+{
+    int i;
+    for (i = 0; i < 2; i++) {
+        if (f->v3) fmi3FreeFMUState(f->c3, (fmi3FMUState *)&f->state[i]);
+        else fmi2FreeFMUstate(f->c2, (fmi2FMUstate *)&f->state[i]);
+        f->state[i] = NULL;
+    }
+}
+
+static void free_instance(fmu *f)
+{
+    free_states(f);
+    if (f->v3) fmi3FreeInstance(f->c3);
+    else fmi2FreeInstance(f->c2);
+    f->c2 = NULL;
+    f->c3 = NULL;
+}
+
+/* statuses: 0 OK, 1 warning, 2 discard, 3 error, 4 fatal (the same in both standards) */
+static int get_real(fmu *f, unsigned vr, double *v)
+{
+    if (f->v3) return (int)fmi3GetFloat64(f->c3, &vr, 1, v, 1);
+    return (int)fmi2GetReal(f->c2, &vr, 1, v);
+}
+
+static int set_real(fmu *f, unsigned vr, double v)
+{
+    if (f->v3) return (int)fmi3SetFloat64(f->c3, &vr, 1, &v, 1);
+    return (int)fmi2SetReal(f->c2, &vr, 1, &v);
+}
+
+static int get_int(fmu *f, unsigned vr, long long *v)
+{
+    int st;
+    if (f->v3) {
+        fmi3Int64 x = 0;
+        st = (int)fmi3GetInt64(f->c3, &vr, 1, &x, 1);
+        if (st != 0) {
+            fmi3Int32 y = 0;
+            st = (int)fmi3GetInt32(f->c3, &vr, 1, &y, 1);
+            x = y;
+        }
+        *v = x;
+        return st;
+    } else {
+        fmi2Integer x = 0;
+        st = (int)fmi2GetInteger(f->c2, &vr, 1, &x);
+        *v = x;
+        return st;
+    }
+}
+
+static int set_int(fmu *f, unsigned vr, long long v, int as64)
+{
+    if (f->v3) {
+        if (as64) {
+            fmi3Int64 x = v;
+            return (int)fmi3SetInt64(f->c3, &vr, 1, &x, 1);
+        } else {
+            fmi3Int32 x = (fmi3Int32)v;
+            return (int)fmi3SetInt32(f->c3, &vr, 1, &x, 1);
+        }
+    } else {
+        fmi2Integer x = (fmi2Integer)v;
+        return (int)fmi2SetInteger(f->c2, &vr, 1, &x);
+    }
+}
+
+static int get_bool(fmu *f, unsigned vr, int *v)
+{
+    int st;
+    if (f->v3) {
+        fmi3Boolean b = fmi3False;
+        st = (int)fmi3GetBoolean(f->c3, &vr, 1, &b, 1);
+        *v = b ? 1 : 0;
+    } else {
+        fmi2Boolean b = fmi2False;
+        st = (int)fmi2GetBoolean(f->c2, &vr, 1, &b);
+        *v = b ? 1 : 0;
+    }
+    return st;
+}
+
+static int set_bool(fmu *f, unsigned vr, int v)
+{
+    if (f->v3) {
+        fmi3Boolean b = v ? fmi3True : fmi3False;
+        return (int)fmi3SetBoolean(f->c3, &vr, 1, &b, 1);
+    } else {
+        fmi2Boolean b = v ? fmi2True : fmi2False;
+        return (int)fmi2SetBoolean(f->c2, &vr, 1, &b);
+    }
+}
+
+static int enter_init(fmu *f, double t0)
+{
+    if (f->v3) return (int)fmi3EnterInitializationMode(f->c3, fmi3False, 0.0, t0, fmi3False, 0.0);
+    if (fmi2SetupExperiment(f->c2, fmi2False, 0.0, t0, fmi2False, 0.0) != fmi2OK) return 3;
+    return (int)fmi2EnterInitializationMode(f->c2);
+}
+
+static int exit_init(fmu *f)
+{
+    if (f->v3) return (int)fmi3ExitInitializationMode(f->c3);
+    return (int)fmi2ExitInitializationMode(f->c2);
+}
+
+static int do_step(fmu *f, double t, double h)
+{
+    if (f->v3) {
+        fmi3Boolean eh = fmi3True, term = fmi3True, early = fmi3True;
+        fmi3Float64 last = NAN;
+        int st = (int)fmi3DoStep(f->c3, t, h, fmi3True, &eh, &term, &early, &last);
+        if (st <= 1) FUZZ_CHECK(isfinite(last), "fmi3DoStep: lastSuccessfulTime %g", last);
+        return st;
+    }
+    return (int)fmi2DoStep(f->c2, t, h, fmi2True);
+}
+
+static int reset(fmu *f)
+{
+    if (f->v3) return (int)fmi3Reset(f->c3);
+    return (int)fmi2Reset(f->c2);
+}
+
+static int terminate(fmu *f)
+{
+    if (f->v3) return (int)fmi3Terminate(f->c3);
+    return (int)fmi2Terminate(f->c2);
+}
+
+static int get_state(fmu *f, int slot)
+{
+    if (f->v3) return (int)fmi3GetFMUState(f->c3, (fmi3FMUState *)&f->state[slot]);
+    return (int)fmi2GetFMUstate(f->c2, (fmi2FMUstate *)&f->state[slot]);
+}
+
+static int set_state(fmu *f, int slot)
+{
+    if (f->v3) return (int)fmi3SetFMUState(f->c3, (fmi3FMUState)f->state[slot]);
+    return (int)fmi2SetFMUstate(f->c2, (fmi2FMUstate)f->state[slot]);
+}
+
+static int serialize(fmu *f, int slot, unsigned char *buf, size_t n)
+{
+    size_t size = 0;
+    int st;
+    if (f->v3) st = (int)fmi3SerializedFMUStateSize(f->c3, (fmi3FMUState)f->state[slot], &size);
+    else st = (int)fmi2SerializedFMUstateSize(f->c2, (fmi2FMUstate)f->state[slot], &size);
+    if (st != 0) return st;
+    FUZZ_CHECK(size == sizeof(model_data), "serialized size %lu", (unsigned long)size);
+    if (f->v3) return (int)fmi3SerializeFMUState(f->c3, (fmi3FMUState)f->state[slot], buf, n);
+    return (int)fmi2SerializeFMUstate(f->c2, (fmi2FMUstate)f->state[slot], (fmi2Byte *)buf, n);
+}
+
+static int deserialize(fmu *f, int slot, const unsigned char *buf, size_t n)
+{
+    if (f->v3)
+        return (int)fmi3DeserializeFMUState(f->c3, buf, n, (fmi3FMUState *)&f->state[slot]);
+    return (int)fmi2DeSerializeFMUstate(f->c2, (const fmi2Byte *)buf, n, (fmi2FMUstate *)&f->state[slot]);
+}
+
+static int debug_logging(fmu *f, int on)
+{
+    static const char *cats[2] = {"logEvents", "logStatusError"};
+    if (f->v3) return (int)fmi3SetDebugLogging(f->c3, on ? fmi3True : fmi3False, 2, cats);
+    return (int)fmi2SetDebugLogging(f->c2, on ? fmi2True : fmi2False, 2, cats);
+}
+
+/* ---------------------------------------------------------------- the harness */
+
+typedef struct {
+    double x, v, a, j, x_al, v_al, a_al, time;
+    int done, busy;
+} outputs;
+
+enum { GOAL_NONE, GOAL_PARAM, GOAL_TARGET, GOAL_STOP };
+
+typedef struct {
+    int tracked;    /* the move is one the harness follows */
+    int goal;       /* GOAL_* */
+    double expect;  /* where a GOAL_PARAM / GOAL_TARGET move rests */
+    double scale;   /* positions seen: the tolerance of the landing */
+    int exec_seen, stop_seen; /* the Boolean inputs at the last step, as the FMU saw them */
+    double t;       /* the FMU's time */
+    int stepping;   /* Step Mode, the last step OK */
+} follow;
+
+static unsigned char state_buf[sizeof(model_data)];
+
+static void read_outputs(fmu *f, outputs *o)
+{
+    static const unsigned vrs[8] = {VR_X, VR_V, VR_A, VR_J, VR_X_AL, VR_V_AL, VR_A_AL, VR_TIME};
+    double *dst[8];
+    int i, st;
+    dst[0] = &o->x; dst[1] = &o->v; dst[2] = &o->a; dst[3] = &o->j;
+    dst[4] = &o->x_al; dst[5] = &o->v_al; dst[6] = &o->a_al; dst[7] = &o->time;
+    for (i = 0; i < 8; i++) {
+        *dst[i] = NAN;
+        st = get_real(f, vrs[i], dst[i]);
+        if (st == 0) FUZZ_CHECK(isfinite(*dst[i]), "output %u = %g after OK", vrs[i], *dst[i]);
+    }
+    o->done = o->busy = -1;
+    (void)get_bool(f, VR_DONE, &o->done);
+    (void)get_bool(f, VR_BUSY, &o->busy);
+}
+
+static double par(fmu *f, unsigned vr)
+{
+    double v = NAN;
+    (void)get_real(f, vr, &v);
+    return v;
+}
+
+/* Where the parametric move rests (NAN: it ends cruising) and the scale of its positions. */
+static double parametric_end(fmu *f, double *scale)
+{
+    long long n = 0;
+    double x0 = par(f, VR_X0), end = x0, ve;
+    int i;
+    (void)get_int(f, VR_N_SEGMENTS, &n);
+    *scale = fabs(x0);
+    if (n <= 0) {
+        end += par(f, VR_DISTANCE);
+        *scale += fabs(par(f, VR_DISTANCE));
+        ve = par(f, VR_V_E);
+    } else {
+        for (i = 0; i < n && i < DJL_VARS_MAX_SEGMENTS; i++) {
+            double d = par(f, VR_SEG_DISTANCE + (unsigned)i);
+            end += d;
+            *scale += fabs(d);
+        }
+        ve = par(f, VR_SEG_V_END + (unsigned)(n - 1));
+    }
+    return ve == 0.0 ? end : NAN;
+}
+
+static void check_step(fmu *f, follow *w)
+{
+    outputs o;
+    double vmax = par(f, VR_V_MAX), amax = par(f, VR_A_MAX), dmax = par(f, VR_D_MAX), fac = 1.0;
+    double lim;
+    long long shaper = 0, n = 0;
+    int i;
+    read_outputs(f, &o);
+    if (!w->stepping) return;
+    FUZZ_CHECK(o.done == !o.busy, "done %d busy %d", o.done, o.busy);
+    (void)get_int(f, VR_SHAPER, &shaper);
+    if (shaper == SHAPER_CUSTOM) {
+        (void)get_int(f, VR_SHAPER_N, &n);
+        fac = 0.0;
+        for (i = 0; i < n && i < 8; i++) fac += fabs(par(f, VR_SHAPER_AMPLITUDE + (unsigned)i));
+    }
+    lim = vmax * fac * (1.0 + 1e-9);
+    FUZZ_CHECK(fabs(o.v) <= lim, "|v| = %.17g above v_max %.17g (x %g)", o.v, vmax, fac);
+    lim = (amax > dmax ? amax : dmax) * fac * (1.0 + 1e-9);
+    FUZZ_CHECK(fabs(o.a) <= lim, "|a| = %.17g above the limits %.17g, %.17g", o.a, amax, dmax);
+    if (fabs(o.x) > w->scale) w->scale = fabs(o.x);
+    if (!w->tracked || !o.done) return;
+    if (w->goal == GOAL_PARAM && !(w->expect == w->expect)) return; /* ends cruising */
+    FUZZ_CHECK(o.v == 0.0 && o.a == 0.0, "done, not at rest: v %.17g a %.17g", o.v, o.a);
+    if (w->goal == GOAL_STOP) return;
+    FUZZ_CHECK(fabs(o.x - w->expect) <= 1e-9 * (fabs(w->expect) + w->scale) + 1e-300,
+               "done at x = %.17g, the goal is %.17g (positions up to %g)", o.x, w->expect,
+               w->scale);
+}
+
+/* Interesting step sizes: multiples and fractions of Te, and anything. */
+static double step_size(fuzz_reader *r, double Te)
+{
+    uint8_t k = rd_u8(r);
+    if (!isfinite(Te) || Te <= 0.0) Te = 1e-3;
+    switch (k % 6) {
+    case 0: return Te;
+    case 1: return Te * (double)(1 + rd_u8(r));
+    case 2: return Te * (double)(1 + rd_u32(r) % 100000);
+    case 3: return Te / (double)(2 + rd_u8(r) % 8);
+    case 4: return Te * (rd_u8(r) / 16.0);
+    default: return rd_double(r);
+    }
+}
+
+/* Save, then at once restore: the FMU's own state is accepted and gives the same outputs. */
+static void own_state(fmu *f, int slot, int stepping)
+{
+    outputs a, b;
+    int st;
+    read_outputs(f, &a);
+    st = get_state(f, slot);
+    if (st != 0) return;
+    st = set_state(f, slot);
+    FUZZ_CHECK(st == 0, "the FMU refused a state it saved itself (set): %s", last_msg);
+    st = serialize(f, slot, state_buf, sizeof state_buf);
+    FUZZ_CHECK(st == 0, "the FMU refused to serialise a state it saved itself: %s", last_msg);
+    st = deserialize(f, 1 - slot, state_buf, sizeof state_buf);
+    FUZZ_CHECK(st == 0, "the FMU refused its own serialised state: %s", last_msg);
+    st = set_state(f, 1 - slot);
+    FUZZ_CHECK(st == 0, "the FMU refused its own deserialised state (set): %s", last_msg);
+    read_outputs(f, &b);
+    if (stepping)
+        FUZZ_CHECK(memcmp(&a, &b, sizeof a) == 0, "a restored state gives other outputs");
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    fuzz_reader r;
+    fmu f;
+    follow w;
+    int ops = 0, st;
+    double Te = 1e-3;
+    r.p = data;
+    r.n = size;
+    r.i = 0;
+    memset(&f, 0, sizeof f);
+    memset(&w, 0, sizeof w);
+    f.v3 = rd_u8(&r) & 1;
+    if (!instantiate(&f, rd_u8(&r) & 1)) return 0;
+    while (rd_more(&r) && ops++ < 400) {
+        uint8_t op = rd_u8(&r);
+        switch (op % 16) {
+        case 0: { /* set a variable of the table (any value, sometimes the wrong type) */
+            const djl_var_info *v = &djl_var_table[rd_u8(&r) % DJL_N_VARS];
+            unsigned vr = v->vr + (v->size > 1 ? rd_u8(&r) % v->size : 0);
+            uint8_t how = rd_u8(&r);
+            char type = how & 0x80 ? "RIBE"[how & 3] : v->type;
+            if (type == 'R') st = set_real(&f, vr, rd_double(&r));
+            else if (type == 'B') st = set_bool(&f, vr, rd_u8(&r) & 1);
+            else st = set_int(&f, vr, (long long)(int8_t)rd_u8(&r), how & 0x40);
+            if (st == 0 && vr == VR_TE) Te = par(&f, VR_TE);
+            (void)djl_log_category_names;
+            break;
+        }
+        case 1: /* an unknown value reference */
+            (void)set_real(&f, rd_u32(&r), rd_double(&r));
+            break;
+        case 2:
+            (void)enter_init(&f, rd_u8(&r) & 1 ? 0.0 : rd_double(&r));
+            break;
+        case 3:
+            st = exit_init(&f);
+            if (st == 0) {
+                Te = par(&f, VR_TE);
+                w.tracked = 1;
+                w.goal = GOAL_PARAM;
+                w.expect = parametric_end(&f, &w.scale);
+                (void)get_bool(&f, VR_EXECUTE, &w.exec_seen);
+                (void)get_bool(&f, VR_STOP, &w.stop_seen);
+                w.t = par(&f, VR_TIME);
+                w.stepping = 0;
+            }
+            break;
+        case 4:
+        case 5:
+        case 6: { /* a step, mostly from where the FMU is */
+            double h = step_size(&r, Te), t = par(&f, VR_TIME);
+            int ex = 0, sp = 0, off = rd_u8(&r) % 16 == 0;
+            if (off) t += rd_double(&r);
+            (void)get_bool(&f, VR_EXECUTE, &ex);
+            (void)get_bool(&f, VR_STOP, &sp);
+            st = do_step(&f, t, h);
+            w.stepping = st == 0;
+            if (st != 0) {
+                w.tracked = 0;
+            } else {
+                if (ex && !w.exec_seen && sp && !w.stop_seen) {
+                    w.tracked = 0;
+                } else if (ex && !w.exec_seen) {
+                    w.goal = GOAL_TARGET;
+                    w.expect = par(&f, VR_TARGET);
+                } else if (sp && !w.stop_seen) {
+                    w.goal = GOAL_STOP;
+                }
+                w.exec_seen = ex;
+                w.stop_seen = sp;
+            }
+            check_step(&f, &w);
+            break;
+        }
+        case 7: /* a command: a target and an execute edge, or a stop edge, or f_mode */
+            switch (rd_u8(&r) % 4) {
+            case 0:
+                (void)set_real(&f, VR_TARGET, rd_double(&r));
+                (void)set_bool(&f, VR_EXECUTE, 1);
+                break;
+            case 1: (void)set_bool(&f, VR_EXECUTE, 0); break;
+            case 2: (void)set_bool(&f, VR_STOP, rd_u8(&r) & 1); break;
+            default: (void)set_real(&f, VR_F_MODE, rd_double(&r)); break;
+            }
+            break;
+        case 8: { /* getters of every variable */
+            int i;
+            outputs o;
+            for (i = 0; i < DJL_N_VARS; i++) {
+                const djl_var_info *v = &djl_var_table[i];
+                double x = 0.0;
+                long long n = 0;
+                int b = 0;
+                if (v->type == 'R') {
+                    st = get_real(&f, v->vr, &x);
+                    /* outputs, calculated parameters, time: finite (a parameter reads back
+                     * what was set, validated at initialisation) */
+                    if (st == 0 && strchr("oct", v->causality))
+                        FUZZ_CHECK(isfinite(x), "%s = %g", v->name, x);
+                } else if (v->type == 'B') {
+                    (void)get_bool(&f, v->vr, &b);
+                } else {
+                    (void)get_int(&f, v->vr, &n);
+                }
+            }
+            read_outputs(&f, &o);
+            break;
+        }
+        case 9: /* save and restore at once */
+            own_state(&f, rd_u8(&r) & 1, w.stepping);
+            break;
+        case 10: { /* restore a saved state (the move is no longer followed) */
+            int slot = rd_u8(&r) & 1;
+            if (f.state[slot] && set_state(&f, slot) == 0) {
+                w.tracked = 0;
+                w.stepping = 0;
+            }
+            break;
+        }
+        case 11: { /* a forged state: one 8-byte word of a saved one changed, resealed */
+            int slot = rd_u8(&r) & 1;
+            size_t at = (rd_u32(&r) % (sizeof(model_data) / 8)) * 8;
+            model_data *d = (model_data *)state_buf;
+            if (!f.state[slot] || serialize(&f, slot, state_buf, sizeof state_buf) != 0) break;
+            if (rd_u8(&r) & 1) {
+                double x = rd_double(&r);
+                memcpy(state_buf + at, &x, 8);
+            } else {
+                uint32_t x = rd_u32(&r);
+                memcpy(state_buf + at + (rd_u8(&r) & 4), &x, 4);
+            }
+            if (rd_u8(&r) % 8) model_state_seal(d);
+            if (deserialize(&f, 1 - slot, state_buf, sizeof state_buf) == 0 &&
+                set_state(&f, 1 - slot) == 0) {
+                w.tracked = 0;
+                w.stepping = 0;
+            }
+            break;
+        }
+        case 12:
+            st = reset(&f);
+            FUZZ_CHECK(st == 0, "Reset returned %d", st);
+            w.tracked = 0;
+            w.stepping = 0;
+            Te = par(&f, VR_TE);
+            break;
+        case 13:
+            (void)terminate(&f);
+            w.stepping = 0;
+            break;
+        case 14:
+            (void)debug_logging(&f, rd_u8(&r) & 1);
+            break;
+        default: /* a new instance */
+            free_instance(&f);
+            memset(&w, 0, sizeof w);
+            Te = 1e-3;
+            if (!instantiate(&f, rd_u8(&r) & 1)) return 0;
+            break;
+        }
+    }
+    free_instance(&f);
+    return 0;
+}
