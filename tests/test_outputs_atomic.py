@@ -425,7 +425,7 @@ def test_sigterm_to_a_pooled_map_exits_quietly(tmp_path):
     proc = subprocess.Popen(
         [sys.executable, "-m", "harness.cli", "map", "X", "--workers", "2", "--max-moves",
          "3000", "-o", str(out)],
-        cwd=Path(__file__).resolve().parents[1], stdout=subprocess.PIPE,
+        cwd=tmp_path, stdout=subprocess.PIPE,  # outside the checkout: the installed package
         stderr=subprocess.PIPE, text=True, start_new_session=True)
     try:
         # wait for the two workers, then let them take tasks
