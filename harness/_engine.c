@@ -28,6 +28,7 @@
 #include <Python.h>
 
 #include <math.h>
+#include <stdio.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -1127,6 +1128,32 @@ static PyObject *engine_sync_velocity(PyObject *self, PyObject *args, PyObject *
  *   state: 2 n_modes values (eps_i, deps_i), initial state, updated in place;
  *   eps: n + 1 outputs (total deflection at each point, eps[0] from state);
  *   states: (n + 1, 2 n_modes) outputs. */
+/* The modes of step_modes, the rows of adjoint_modes / adjoint_sums (``what``): damping
+ * ratios in [0, 1), frequencies finite and > 0 (n steps each).  Returns -1 with a
+ * ValueError naming the mode or row (and step).  (PyErr_Format knows no %g: the message
+ * is formatted by snprintf.) */
+static int check_rows(const double *zeta, const double *f, Py_ssize_t R, Py_ssize_t n,
+                      const char *what)
+{
+    char msg[160];
+    Py_ssize_t r, k;
+    for (r = 0; r < R; r++)
+        if (!(zeta[r] >= 0.0 && zeta[r] < 1.0)) {
+            snprintf(msg, sizeof msg, "%s %ld: damping ratio %g not in [0, 1)", what, (long)r,
+                     zeta[r]);
+            PyErr_SetString(PyExc_ValueError, msg);
+            return -1;
+        }
+    for (k = 0; k < R * n; k++)
+        if (!(f[k] > 0.0) || !isfinite(f[k])) {
+            snprintf(msg, sizeof msg, "%s %ld: frequency %g Hz at step %ld is not a finite "
+                     "number > 0", what, (long)(k / (n ? n : 1)), f[k], (long)(k % (n ? n : 1)));
+            PyErr_SetString(PyExc_ValueError, msg);
+            return -1;
+        }
+    return 0;
+}
+
 static PyObject *engine_step_modes(PyObject *self, PyObject *args)
 {
     PyObject *oa, *oj, *of, *oz, *og, *ost, *oe, *oss;
@@ -1166,19 +1193,7 @@ static PyObject *engine_step_modes(PyObject *self, PyObject *args)
     st = bst.buf;
     eps = be.buf;
     states = bss.buf;
-    for (i = 0; i < nm; i++) {
-        if (!(zeta[i] >= 0.0 && zeta[i] < 1.0)) {
-            PyErr_Format(PyExc_ValueError, "mode %zd: damping ratio %g not in [0, 1)", i, zeta[i]);
-            goto fail_all;
-        }
-    }
-    for (k = 0; k < nm * n; k++) {
-        if (!(f[k] > 0.0) || !isfinite(f[k])) {
-            PyErr_Format(PyExc_ValueError, "mode %zd: frequency %g Hz at step %zd is not a finite "
-                         "number > 0", k / (n ? n : 1), f[k], k % (n ? n : 1));
-            goto fail_all;
-        }
-    }
+    if (check_rows(zeta, f, nm, n, "mode") < 0) goto fail_all;
     cache = (double *)PyMem_Calloc((size_t)(6 * nm), sizeof(double));
     if (!cache) {
         PyErr_NoMemory();
@@ -1299,20 +1314,7 @@ static PyObject *engine_adjoint_modes(PyObject *self, PyObject *args)
     zeta = bz.buf;
     gain = bg.buf;
     psi = bp.buf;
-    for (r = 0; r < R; r++) {
-        if (!(zeta[r] >= 0.0 && zeta[r] < 1.0)) {
-            PyErr_Format(PyExc_ValueError, "row %zd: damping ratio %g not in [0, 1)", r,
-                         zeta[r]);
-            goto fail_all;
-        }
-    }
-    for (k = 0; k < R * n; k++) {
-        if (!(f[k] > 0.0) || !isfinite(f[k])) {
-            PyErr_Format(PyExc_ValueError, "row %zd: frequency %g Hz at step %zd is not a finite "
-                         "number > 0", k / (n ? n : 1), f[k], k % (n ? n : 1));
-            goto fail_all;
-        }
-    }
+    if (check_rows(zeta, f, R, n, "row") < 0) goto fail_all;
     Py_BEGIN_ALLOW_THREADS
     for (r = 0; r < R; r++) {
         /* L = d state(n) / d state(k+1), from the last step back */
@@ -1371,7 +1373,7 @@ static PyObject *engine_adjoint_sums(PyObject *self, PyObject *args)
 {
     PyObject *of, *oz, *og, *op;
     double h, factor = 1.0;
-    Py_ssize_t n, R, r, k, L;
+    Py_ssize_t n, R, r, L;
     Py_buffer bf, bz, bg, bp;
     const double *f, *zeta, *gain;
     double *S;
@@ -1393,20 +1395,7 @@ static PyObject *engine_adjoint_sums(PyObject *self, PyObject *args)
     zeta = bz.buf;
     gain = bg.buf;
     S = bp.buf;
-    for (r = 0; r < R; r++) {
-        if (!(zeta[r] >= 0.0 && zeta[r] < 1.0)) {
-            PyErr_Format(PyExc_ValueError, "row %zd: damping ratio %g not in [0, 1)", r,
-                         zeta[r]);
-            goto fail_all;
-        }
-    }
-    for (k = 0; k < R * n; k++) {
-        if (!(f[k] > 0.0) || !isfinite(f[k])) {
-            PyErr_Format(PyExc_ValueError, "row %zd: frequency %g Hz at step %zd is not a finite "
-                         "number > 0", k / (n ? n : 1), f[k], k % (n ? n : 1));
-            goto fail_all;
-        }
-    }
+    if (check_rows(zeta, f, R, n, "row") < 0) goto fail_all;
     Py_BEGIN_ALLOW_THREADS
     for (r = 0; r < R; r++)
         adjoint_row(h, &f[r * n], factor, zeta[r], gain[r], n, &S[r * 6 * L]);

@@ -147,7 +147,7 @@ from . import __version__
 from .files import write_text
 from .fmu.build import cache_dir
 from .metrics import settling_time
-from .plant import Mode, ScheduledMode, free_amplitude, hermite_mid
+from .plant import Mode, ScheduledMode, free_amplitude, hermite_mid, transitions
 from .scenario import Scenario
 from .simulation.axis import PlantInput
 from .simulation.master import step_plant
@@ -426,15 +426,7 @@ def _one_step(omega: np.ndarray, zeta: np.ndarray, gain: np.ndarray, h: float
     """
     sig = zeta * omega
     w2 = omega * omega
-    wd = omega * np.sqrt(1.0 - zeta * zeta)
-    e = np.exp(-sig * h)
-    c = np.cos(wd * h)
-    s = np.sin(wd * h) / wd
-    phi = np.empty((*np.shape(omega), 2, 2))
-    phi[..., 0, 0] = e * (c + sig * s)
-    phi[..., 0, 1] = e * s
-    phi[..., 1, 0] = -e * w2 * s
-    phi[..., 1, 1] = e * (c - sig * s)
+    phi = transitions(omega, zeta, h)
     # zero state: α = (-g u0 - 2σβ)/ω², β = -g jerk/ω²; s' = (α + βh, β) - Φ (α, β)
     d_alpha = np.stack([1.0 - phi[..., 0, 0], -phi[..., 1, 0]], axis=-1)
     d_beta = np.stack([h - phi[..., 0, 1], 1.0 - phi[..., 1, 1]], axis=-1)

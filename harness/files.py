@@ -449,6 +449,25 @@ def _umask_mode() -> int:
     return 0o666 & ~mask
 
 
+@contextlib.contextmanager
+def _replacing(path: Path, mode: str, **open_kw: Any) -> Iterator[Any]:
+    """Open a temporary file beside ``path``; once the block ends, rename it over ``path``.
+
+    The temporary file has a unique name (concurrent writers do not collide) and is
+    removed if the block fails or is interrupted: ``path`` holds the previous contents
+    or the new ones, never a part.
+    """
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, mode, **open_kw) as fh:
+            yield fh
+        os.chmod(tmp, _umask_mode())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
 def write_csv(path: str | os.PathLike[str], rows: Sequence[Mapping[str, Any]]) -> Path:
     """Write dict rows as CSV atomically (temporary file, then rename).
 
@@ -466,18 +485,11 @@ def write_csv(path: str | os.PathLike[str], rows: Sequence[Mapping[str, Any]]) -
     Path
     """
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", newline="", encoding="utf-8") as fh:
-            w = csv.DictWriter(fh, fieldnames=list(rows[0]) if rows else [])
-            w.writeheader()
-            for r in rows:
-                w.writerow({k: (f"{v:.10g}" if isinstance(v, float) else v) for k, v in r.items()})
-        os.chmod(tmp, _umask_mode())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with _replacing(path, "w", newline="", encoding="utf-8") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]) if rows else [])
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (f"{v:.10g}" if isinstance(v, float) else v) for k, v in r.items()})
     return path
 
 
@@ -489,15 +501,8 @@ def write_text(path: str | os.PathLike[str], text: str) -> Path:
     the new one, never a part.
     """
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            fh.write(text)
-        os.chmod(tmp, _umask_mode())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with _replacing(path, "w", encoding="utf-8", newline="") as fh:
+        fh.write(text)
     return path
 
 
@@ -510,16 +515,9 @@ def write_mat(path: str | os.PathLike[str], variables: Mapping[str, Any]) -> Pat
     from scipy.io import savemat  # deferred: scipy is heavy to import
 
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            savemat(fh, dict(variables), long_field_names=True, do_compression=True,
-                    oned_as="column")
-        os.chmod(tmp, _umask_mode())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with _replacing(path, "wb") as fh:
+        savemat(fh, dict(variables), long_field_names=True, do_compression=True,
+                oned_as="column")
     return path
 
 

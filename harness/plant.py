@@ -76,6 +76,7 @@ __all__ = [
     "step_mode",
     "step_mode_jerk",
     "transition",
+    "transitions",
 ]
 
 
@@ -204,6 +205,34 @@ def transition(omega: float, zeta: float, h: float) -> tuple[float, float, float
     c = math.cos(wd * h)
     s = math.sin(wd * h) / wd
     return (e * (c + sig * s), e * s, -e * omega * omega * s, e * (c - sig * s))
+
+
+def transitions(omega: np.ndarray, zeta: np.ndarray, h: float) -> np.ndarray:
+    """:func:`transition` for arrays of modes (the same operations), shape (..., 2, 2).
+
+    Parameters
+    ----------
+    omega, zeta : ndarray
+        Natural angular frequencies (rad/s) and damping ratios, broadcast together.
+    h : float
+        Time step (s).
+
+    Returns
+    -------
+    ndarray
+        Φ for each mode, ``[..., i, j]`` = Φ_(i+1)(j+1).
+    """
+    sig = zeta * omega
+    wd = omega * np.sqrt(1.0 - zeta * zeta)
+    e = np.exp(-sig * h)
+    c = np.cos(wd * h)
+    s = np.sin(wd * h) / wd
+    phi = np.empty((*np.shape(sig), 2, 2))
+    phi[..., 0, 0] = e * (c + sig * s)
+    phi[..., 0, 1] = e * s
+    phi[..., 1, 0] = -e * omega * omega * s
+    phi[..., 1, 1] = e * (c - sig * s)
+    return phi
 
 
 def step_mode(

@@ -456,3 +456,26 @@ def test_replan_equals_planning_the_same_parameters():
     shaped = _engine.plan({**base, "shaper": 1, "f_shaper": 8.0})
     with pytest.raises(ValueError, match="unshaped"):
         shaped.replan(0.1, 0.1, 0.1, 0.1)
+
+
+@pytest.mark.parametrize("fn", ["adjoint_modes", "adjoint_sums"])
+def test_adjoint_rows_refuse_a_bad_damping_or_frequency(fn):
+    """Both adjoint functions check their rows the same way, naming the row (and step)."""
+    n, h = 5, 1e-3
+    f = np.full((1, n), 8.0)
+    out = np.empty(1 * n * 4) if fn == "adjoint_modes" else np.empty(6 * (n + 1))
+
+    def call(f_rows, zeta):
+        if fn == "adjoint_modes":
+            return _engine.adjoint_modes(h, f_rows, np.array([zeta]), np.array([1.0]), n,
+                                         out.reshape(1, n, 2, 2))
+        return _engine.adjoint_sums(h, f_rows, np.array([zeta]), np.array([1.0]), n,
+                                    out.reshape(1, 6, n + 1), 1.0)
+
+    call(f, 0.05)  # accepted
+    with pytest.raises(ValueError, match="row 0: damping ratio 1 not in"):
+        call(f, 1.0)
+    bad = f.copy()
+    bad[0, 3] = np.nan
+    with pytest.raises(ValueError, match="row 0: frequency nan Hz at step 3"):
+        call(bad, 0.05)

@@ -301,3 +301,23 @@ def test_simulate_mode_input_checks():
         simulate_mode(np.arange(5) * 1e-3, np.zeros(5), m, f=np.ones(3))
     with pytest.raises(ValueError):
         simulate_mode(np.arange(5) * 1e-3, np.zeros(5), m, f=np.array([1.0, -1.0, 1.0, 1.0]))
+
+
+def test_transitions_are_the_matrix_exponential():
+    """plant.transitions (used by the shaper design and the physical limit) is exp(A h) of
+    the damped oscillator for every mode of an array, against scipy's expm."""
+    from scipy.linalg import expm
+
+    from harness.plant import transition, transitions
+
+    omega = np.array([[2 * np.pi * 3.0, 2 * np.pi * 8.5], [2 * np.pi * 40.0, 1.0]])
+    zeta = np.array([[0.0], [0.3]])
+    h = 1e-3
+    phi = transitions(omega, zeta, h)
+    assert phi.shape == (2, 2, 2, 2)
+    for i in range(2):
+        for j in range(2):
+            w, z = omega[i, j], zeta[i, 0]
+            A = np.array([[0.0, 1.0], [-w * w, -2 * z * w]])
+            np.testing.assert_allclose(phi[i, j], expm(A * h), rtol=1e-12, atol=1e-15)
+            assert tuple(phi[i, j].ravel()) == transition(w, z, h)  # the same operations

@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 
 from ..compiled import engine as _compiled_engine
-from ..plant import hermite_mid
+from ..plant import hermite_mid, transitions
 from ..scenario import Scenario
 from ..simulation.session import Session
 from ..simulation.shaped_axis import ShaperSpec
@@ -79,25 +79,6 @@ def _simplex(n: int, step: float) -> np.ndarray:
     a2 = np.array([p[0] for p in pts]) / k
     a3 = np.array([p[1] for p in pts]) / k
     return np.vstack([1.0 - a2 - a3, a2, a3])
-
-
-def _transition(omega: np.ndarray, zeta: np.ndarray, h: float) -> np.ndarray:
-    """Return the free oscillator's one-step transition matrices Φ(h), shape (..., 2, 2).
-
-    The homogeneous part of :func:`harness.plant.step_mode_jerk` (the same
-    operations), for the state (ε, ε̇).
-    """
-    sig = zeta * omega
-    wd = omega * np.sqrt(1.0 - zeta * zeta)
-    e = np.exp(-sig * h)
-    c = np.cos(wd * h)
-    s = np.sin(wd * h) / wd
-    phi = np.empty((*np.shape(omega), 2, 2))
-    phi[..., 0, 0] = e * (c + sig * s)
-    phi[..., 0, 1] = e * s
-    phi[..., 1, 0] = -e * omega * omega * s
-    phi[..., 1, 1] = e * (c - sig * s)
-    return phi
 
 
 @dataclass
@@ -374,7 +355,7 @@ class ShapedObjective:
         part = np.zeros((W + 1, R, 2, D + 1))
         part[:W] = np.cumsum(contrib[::-1], axis=0)[::-1]
         # Φ(k_end, k)^-1 for every window sample k, every row
-        phi = _transition(2.0 * np.pi * F[:, k_w:k_end], zeta[:, None], h)  # (R, W, 2, 2)
+        phi = transitions(2.0 * np.pi * F[:, k_w:k_end], zeta[:, None], h)  # (R, W, 2, 2)
         det = phi[..., 0, 0] * phi[..., 1, 1] - phi[..., 0, 1] * phi[..., 1, 0]
         inv = np.empty_like(phi)
         inv[..., 0, 0], inv[..., 1, 1] = phi[..., 1, 1] / det, phi[..., 0, 0] / det
