@@ -43,6 +43,11 @@ extern "C" {
 #define DJL_MAX_FILTER_SAMPLES 100000000
 /* Longest motion accepted, in samples (keeps every sample index exact in a double). */
 #define DJL_MAX_MOTION_SAMPLES 1000000000000000LL
+/* Latest sample a replanned motion may end at: a replan at the FMU's horizon
+ * (DJL_MAX_MOTION_SAMPLES) followed by a motion as long, and the ramps of a
+ * transition; a replan that would end later is refused (a stop at a d_max too
+ * low to stop in that time).  Still exact in a double. */
+#define DJL_MAX_PLAN_END (2 * DJL_MAX_MOTION_SAMPLES + 4LL * DJL_MAX_FILTER_SAMPLES)
 /* Largest |x0| + sum of |distance| accepted, m (every value of a plan stays finite). */
 #define DJL_MAX_POSITION 1e300
 /* Smallest magnitude accepted for Te, v_max, a_max, d_max, the jerk times and

@@ -43,6 +43,9 @@ typedef struct {
 /* Error for segment i, planned in the frame of its direction with the
  * distance c->D (the user's distance plus what the rounding of the earlier
  * segments passed on); dmin is the shortest distance that frame allows. */
+static void least_samples(double D, double vs, double ve, double am, double dm, double Te,
+                          double *na, double *nd);
+
 static djl_status infeasible(djl_error *err, const djl_params *p, int i, const segment_problem *c,
                              double dmin, int kl)
 {
@@ -62,13 +65,32 @@ static djl_status infeasible(djl_error *err, const djl_params *p, int i, const s
         c2.merge23 = 1;
         dmin = distance_continuous(&c2, c->vs, 0.0);
     }
-    if (c->D >= dmin && (c->ve == 0.0 || !c->last))
+    if (c->D >= dmin && (c->ve == 0.0 || !c->last)) {
+        /* the distance left to this segment may not be the user's: a rounded segment
+         * before it passed on its residual (up to half a sample of travel at its speed,
+         * documented).  If no profile within the limits covers that distance in the
+         * samples a plan may hold, the limits are too low for the residual: infeasible
+         * (issue 21: a_max = 1e-30 m/s^2 and a residual of 6e-4 m into an empty last
+         * segment, a_max = 1e-300 m/s^2 with Te = 4e154 s, were internal errors) */
+        double na, nd, lim = (double)DJL_MAX_MOTION_SAMPLES * (1.0 + 1e-9), R;
+        least_samples(c->D, c->vs, c->ve, c->am, c->dm, c->Te, &na, &nd);
+        R = djl_ldexp(c->D, -kl) - djl_fabs(D);
+        if (na + nd > lim)
+            return set_error(err, DJL_E_INFEASIBLE, na >= nd ? "a_max" : "d_max",
+                             na >= nd ? p->a_max : p->d_max,
+                             "%s = %g m from %g m/s to %g m/s: the rounding of the segments "
+                             "before it to whole samples passes on %g m (half a sample of "
+                             "travel at their speed at most), which a_max = %g m/s2 and "
+                             "d_max = %g m/s2 cannot cover in the %g samples of Te = %g s a "
+                             "plan may hold (it needs %g)", dname, D, vs, ve, R, p->a_max,
+                             p->d_max, (double)DJL_MAX_MOTION_SAMPLES, p->Te, na + nd);
         /* theory says a profile exists (docs/generator.md): a planner limitation */
         return set_error(err, DJL_E_INTERNAL, dname, D,
                          "%s = %g m from %g m/s to %g m/s (v_max = %g m/s, a_max = %g m/s2, "
                          "d_max = %g m/s2, Te = %g s): the planner found no profile landing "
                          "exactly on a sample although one should exist; please report it",
                          dname, D, vs, ve, p->v_max, p->a_max, p->d_max, p->Te);
+    }
     if (c->last && c->ve != 0.0 && c->D >= dmin) {
         /* beyond the minimum, room for a dip worth one sample of travel at v
          * (area a t^2/4 in a time t) and for the jerk times of its stages:
@@ -223,6 +245,32 @@ static djl_status land_last_segment(motion_work *w, int n, djl_error *err)
  * exceeds DJL_MAX_MOTION_SAMPLES cannot be planned: it is refused here,
  * naming the limit that takes the longer part.  (Computed without overflow:
  * a and d may be 1e-300 or 1e300.) */
+static void least_samples(double D, double vs, double ve, double am, double dm, double Te,
+                          double *na, double *nd)
+{
+    double vt = peak_without_velocity_limit(D, vs, ve, am, dm);
+    if (vt >= vs && vt >= ve) {
+        /* (vt - vs) / am and (vt - ve) / dm without their cancellation: with a_max
+         * = 1e-300 m/s^2 vt rounds to vs, and a cruise of 10^18 samples counted 0
+         * (issue 21: 1e15 m from 0.5 m/s was an internal error, not refused).  With
+         * r = am / (am + dm):
+         *   (vt - vs) / am = ((ve^2 - vs^2) / (am + dm) + 2 D (1 - r)) / (vt + vs),
+         *   (vt - ve) / dm = ((vs^2 - ve^2) / (am + dm) + 2 D r) / (vt + ve). */
+        double r = 1.0 / (1.0 + dm / am), sum = am + dm; /* sum = inf: those terms are 0 */
+        double ta = ((ve - vs) * ((ve + vs) / sum) + 2.0 * D * (1.0 - r)) / (vt + vs);
+        double td = ((vs - ve) * ((vs + ve) / sum) + 2.0 * D * r) / (vt + ve);
+        if (!(ta >= 0.0) || !(vt + vs > 0.0)) ta = (vt - vs) / am; /* vt = vs = 0: underflow */
+        if (!(td >= 0.0) || !(vt + ve > 0.0)) td = (vt - ve) / dm;
+        *na = ta / Te;
+        *nd = td / Te;
+    } else {
+        double Ta = 2.0 * D / (vs + djl_hypot(vs, djl_sqrt(2.0 * am) * djl_sqrt(D)));
+        double Td = 2.0 * D / (ve + djl_hypot(ve, djl_sqrt(2.0 * dm) * djl_sqrt(D)));
+        *na = dmax2(Ta, ve > vs ? (ve - vs) / am : 0.0) / Te;
+        *nd = dmax2(Td, ve > vs ? 0.0 : (vs - ve) / dm) / Te;
+    }
+}
+
 static djl_status check_duration(const djl_params *p, int i, djl_error *err)
 {
     double Dr = p->n_segments == 0 ? p->distance : p->seg_distance[i];
@@ -230,19 +278,10 @@ static djl_status check_duration(const djl_params *p, int i, djl_error *err)
     double vS = i == 0 ? p->v0 : p->seg_v_end[i - 1];
     double sg = Dr < 0.0 ? -1.0 : 1.0, D = djl_fabs(Dr), vs = sg * vS, ve = sg * vE, Te = p->Te;
     double am = p->a_max, dm = p->d_max, lim = (double)DJL_MAX_MOTION_SAMPLES * (1.0 + 1e-9);
-    double vt, na, nd;
+    double na, nd;
     char dname[40];
     if (!(D > 0.0)) return DJL_OK;
-    vt = peak_without_velocity_limit(D, vs, ve, am, dm);
-    if (vt >= vs && vt >= ve) {
-        na = (vt - vs) / am / Te;
-        nd = (vt - ve) / dm / Te;
-    } else {
-        double Ta = 2.0 * D / (vs + djl_hypot(vs, djl_sqrt(2.0 * am) * djl_sqrt(D)));
-        double Td = 2.0 * D / (ve + djl_hypot(ve, djl_sqrt(2.0 * dm) * djl_sqrt(D)));
-        na = dmax2(Ta, ve > vs ? (ve - vs) / am : 0.0) / Te;
-        nd = dmax2(Td, ve > vs ? 0.0 : (vs - ve) / dm) / Te;
-    }
+    least_samples(D, vs, ve, am, dm, Te, &na, &nd);
     if (!(na + nd > lim)) return DJL_OK;
     if (p->n_segments == 0)
         snprintf(dname, sizeof dname, "distance");
@@ -397,7 +436,7 @@ static djl_status walk_pieces(const motion_work *w, djl_plan *plan, const djl_pa
 {
     int j;
     double x = 0.0, v = p->v0, a = 0.0, xal = 0.0, val = p->v0;
-    double vsnap = p->v0, level = 0.0;
+    double vsnap = p->v0, level = 0.0, reach = 0.0;
     int si = 0, seg = 1, last_seg_start = 0;
     plan->n_pieces = 0;
     for (j = 0; j < nb; j++) {
@@ -460,8 +499,16 @@ static djl_status walk_pieces(const motion_work *w, djl_plan *plan, const djl_pa
             val += Lt * level;
         }
     }
-    /* self-check: the plan lands where it was asked to */
-    if (!(djl_fabs(plan->piece[plan->n_pieces - 1].x - plan->x_target) <= tolx * scale))
+    /* self-check: the plan lands where it was asked to, to within tolx of the
+     * distances asked for; the exact walk also of the positions it went through
+     * (a pinned last segment's residual, up to half a sample of travel at its
+     * end speed, taken up by an earlier segment can carry the axis far beyond
+     * the distances: the rounding of x there is that of those positions;
+     * issue 21: 6e11 m/s at the end of 0.05 m with Te = 0.05 s went through
+     * -1.5e10 m and was an internal error) */
+    for (j = 0; exact && j < plan->n_pieces; j++)
+        if (djl_fabs(plan->piece[j].x) > reach) reach = djl_fabs(plan->piece[j].x);
+    if (!(djl_fabs(plan->piece[plan->n_pieces - 1].x - plan->x_target) <= tolx * (scale + reach)))
         return set_error(err, DJL_E_INTERNAL, "", 0.0,
                          "planner self-check: final displacement %.17g m, expected %.17g m",
                          plan->piece[plan->n_pieces - 1].x, plan->x_target);

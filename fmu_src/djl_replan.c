@@ -134,7 +134,8 @@ static int stop_steps(double v, int64_t t0, const int32_t N[4], double d_max, do
     if (v == 0.0) return 0;
     m = djl_ceil(djl_fabs(v) / (d_max * Te) - lag);
     m = dmax2(m, dmax2(n3, 1.0));
-    if (m > 1e15) m = 1e15;
+    /* (a stop this long ends past DJL_MAX_PLAN_END: compose refuses it) */
+    if (m > 4e15) m = 4e15;
     d = djl_fabs(v) / ((m + lag) * Te);
     if (d > d_max) { /* rounding of the division: one sample more */
         m += 1.0;
@@ -476,9 +477,19 @@ static djl_status compose(const djl_plan *old, const replan_state *r, const tran
                           int64_t T, const djl_plan *fresh, const djl_goal *g, djl_plan *out,
                           djl_error *err)
 {
-    double st[4], x_goal;
+    double st[4], x_goal, kend;
     djl_params p = old->p;
     int np, i, ns;
+    /* a motion ending past DJL_MAX_PLAN_END: the FMU could neither reach its end nor
+     * keep it in a state (issue 21: a stop at d_max = 3e-27 m/s^2 planned 1.6e15
+     * samples, and the FMU then refused its own state) */
+    kend = (double)T + (fresh ? (double)fresh->k_end : 0.0);
+    if (!(kend <= (double)DJL_MAX_PLAN_END))
+        return set_error(err, DJL_E_INFEASIBLE, "d_max", p.d_max,
+                         "replan: the new motion would end %g samples of Te = %g s after the "
+                         "replan, past the %g a motion may reach: with d_max = %g m/s2 a stop "
+                         "from %g m/s takes too long", kend - (double)r->o, p.Te,
+                         (double)DJL_MAX_PLAN_END, p.d_max, djl_fabs(r->v));
     np = walk(r, t->s, t->n, T, NULL, st);
     if (r->n_run + t->n + (fresh ? fresh->n_steps : 0) > DJL_MAX_PLAN_STEPS ||
         np + (fresh ? fresh->n_pieces : 1) > DJL_MAX_PIECES)

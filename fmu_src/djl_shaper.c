@@ -458,7 +458,7 @@ const char *djl_shaper_memory_flaw(const djl_shaper_memory *m, const djl_shaper 
         return "no phase of f_mode with a shaper timed by it";
     for (i = 0; i < m->n_past; i++) {
         const djl_past_piece *e = &PAST(m, i);
-        if (e->k < -2 * DJL_MAX_MOTION_SAMPLES || e->k > 2 * DJL_MAX_MOTION_SAMPLES ||
+        if (e->k < -DJL_MAX_PLAN_END || e->k > DJL_MAX_PLAN_END ||
             (i > 0 && e->k <= PAST(m, i - 1).k))
             return "the shaper's past pieces are not in order";
         if (!djl_isfinite(e->x) || !djl_isfinite(e->v) || !djl_isfinite(e->a) ||
@@ -467,7 +467,7 @@ const char *djl_shaper_memory_flaw(const djl_shaper_memory *m, const djl_shaper 
     }
     for (i = 0; i < m->n_phase; i++) {
         const djl_phase_point *e = &PHASE(m, i);
-        if (e->k < -2 * DJL_MAX_MOTION_SAMPLES || e->k > 2 * DJL_MAX_MOTION_SAMPLES ||
+        if (e->k < -DJL_MAX_PLAN_END || e->k > DJL_MAX_PLAN_END ||
             (i > 0 && (e->k <= PHASE(m, i - 1).k || !(e->P >= PHASE(m, i - 1).P))))
             return "the phase of f_mode is not in order";
         /* the rate of an f_mode accepted: no delay beyond the memory's window */

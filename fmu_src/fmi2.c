@@ -255,8 +255,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
     CHECK(c, "fmi2GetFMUstate", MASK_FMUSTATE);
     NEED(c, "fmi2GetFMUstate", FMUstate);
     d = (model_data *)*FMUstate;
-    if (d && model_state_check(&s->m, "fmi2GetFMUstate (state to overwrite)", d,
-                               sizeof(model_data)) != ST_OK)
+    if (d && model_state_check(&s->m, "fmi2GetFMUstate (state to overwrite)", d) != ST_OK)
         return fmi2Error;
     if (!d) {
         d = (model_data *)s->cb.allocateMemory(1, sizeof(model_data));
@@ -272,7 +271,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 {
     inst2 *s = INST(c);
     CHECK(c, "fmi2SetFMUstate", MASK_RESTORE);
-    if (model_state_check(&s->m, "fmi2SetFMUstate", FMUstate, sizeof(model_data)) != ST_OK)
+    if (model_state_check(&s->m, "fmi2SetFMUstate", (const model_data *)FMUstate) != ST_OK)
         return fmi2Error;
     memcpy(&s->m.d, FMUstate, sizeof(model_data));
     return fmi2OK;
@@ -303,7 +302,8 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
 {
     inst2 *s = INST(c);
     CHECK(c, "fmi2SerializeFMUstate", MASK_FMUSTATE);
-    if (model_state_check(&s->m, "fmi2SerializeFMUstate", FMUstate, sizeof(model_data)) != ST_OK)
+    if (model_state_check(&s->m, "fmi2SerializeFMUstate",
+                          (const model_data *)FMUstate) != ST_OK)
         return fmi2Error;
     NEED(c, "fmi2SerializeFMUstate", serializedState);
     if (size < model_state_size())
@@ -318,21 +318,28 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
                                    fmi2FMUstate *FMUstate)
 {
     inst2 *s = INST(c);
-    model_data *d;
+    model_data *d, *old;
     CHECK(c, "fmi2DeSerializeFMUstate", MASK_RESTORE);
     NEED(c, "fmi2DeSerializeFMUstate", FMUstate);
     NEED(c, "fmi2DeSerializeFMUstate", serializedState);
-    if (model_state_check(&s->m, "fmi2DeSerializeFMUstate", serializedState, size) != ST_OK)
+    old = (model_data *)*FMUstate;
+    if (old &&
+        model_state_check(&s->m, "fmi2DeSerializeFMUstate (state to overwrite)", old) != ST_OK)
         return fmi2Error;
-    d = (model_data *)*FMUstate;
-    if (d && model_state_check(&s->m, "fmi2DeSerializeFMUstate (state to overwrite)", d,
-                               sizeof(model_data)) != ST_OK)
+    if (model_state_check_size(&s->m, "fmi2DeSerializeFMUstate", size) != ST_OK) return fmi2Error;
+    /* the bytes are checked in a new state object (aligned, off the stack); a state to
+     * overwrite is overwritten only with bytes that passed */
+    d = (model_data *)s->cb.allocateMemory(1, sizeof(model_data));
+    if (!d) return (fmi2Status)model_refuse(&s->m, "fmi2DeSerializeFMUstate: out of memory");
+    if (model_state_load(&s->m, "fmi2DeSerializeFMUstate", serializedState, size, d) != ST_OK) {
+        s->cb.freeMemory(d);
         return fmi2Error;
-    if (!d) {
-        d = (model_data *)s->cb.allocateMemory(1, sizeof(model_data));
-        if (!d) return (fmi2Status)model_refuse(&s->m, "fmi2DeSerializeFMUstate: out of memory");
     }
-    memcpy(d, serializedState, sizeof(model_data));
+    if (old) {
+        memcpy(old, d, sizeof(model_data));
+        s->cb.freeMemory(d);
+        d = old;
+    }
     *FMUstate = d;
     return fmi2OK;
 }

@@ -475,8 +475,7 @@ fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
     CHECK(instance, "fmi3GetFMUState", MASK_FMUSTATE);
     NEED(instance, "fmi3GetFMUState", FMUState);
     d = (model_data *)*FMUState;
-    if (d && model_state_check(&s->m, "fmi3GetFMUState (state to overwrite)", d,
-                               sizeof(model_data)) != ST_OK)
+    if (d && model_state_check(&s->m, "fmi3GetFMUState (state to overwrite)", d) != ST_OK)
         return fmi3Error;
     if (!d) {
         d = (model_data *)malloc(sizeof(model_data));
@@ -492,7 +491,7 @@ fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState)
 {
     inst3 *s = INST(instance);
     CHECK(instance, "fmi3SetFMUState", MASK_RESTORE);
-    if (model_state_check(&s->m, "fmi3SetFMUState", FMUState, sizeof(model_data)) != ST_OK)
+    if (model_state_check(&s->m, "fmi3SetFMUState", (const model_data *)FMUState) != ST_OK)
         return fmi3Error;
     memcpy(&s->m.d, FMUState, sizeof(model_data));
     return fmi3OK;
@@ -522,7 +521,8 @@ fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState,
 {
     inst3 *s = INST(instance);
     CHECK(instance, "fmi3SerializeFMUState", MASK_FMUSTATE);
-    if (model_state_check(&s->m, "fmi3SerializeFMUState", FMUState, sizeof(model_data)) != ST_OK)
+    if (model_state_check(&s->m, "fmi3SerializeFMUState",
+                          (const model_data *)FMUState) != ST_OK)
         return fmi3Error;
     NEED(instance, "fmi3SerializeFMUState", serializedState);
     if (size < model_state_size())
@@ -537,21 +537,28 @@ fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte seriali
                                    size_t size, fmi3FMUState *FMUState)
 {
     inst3 *s = INST(instance);
-    model_data *d;
+    model_data *d, *old;
     CHECK(instance, "fmi3DeserializeFMUState", MASK_RESTORE);
     NEED(instance, "fmi3DeserializeFMUState", FMUState);
     NEED(instance, "fmi3DeserializeFMUState", serializedState);
-    if (model_state_check(&s->m, "fmi3DeserializeFMUState", serializedState, size) != ST_OK)
+    old = (model_data *)*FMUState;
+    if (old &&
+        model_state_check(&s->m, "fmi3DeserializeFMUState (state to overwrite)", old) != ST_OK)
         return fmi3Error;
-    d = (model_data *)*FMUState;
-    if (d && model_state_check(&s->m, "fmi3DeserializeFMUState (state to overwrite)", d,
-                               sizeof(model_data)) != ST_OK)
+    if (model_state_check_size(&s->m, "fmi3DeserializeFMUState", size) != ST_OK) return fmi3Error;
+    /* the bytes are checked in a new state object (aligned, off the stack); a state to
+     * overwrite is overwritten only with bytes that passed */
+    d = (model_data *)malloc(sizeof(model_data));
+    if (!d) return (fmi3Status)model_refuse(&s->m, "fmi3DeserializeFMUState: out of memory");
+    if (model_state_load(&s->m, "fmi3DeserializeFMUState", serializedState, size, d) != ST_OK) {
+        free(d);
         return fmi3Error;
-    if (!d) {
-        d = (model_data *)malloc(sizeof(model_data));
-        if (!d) return (fmi3Status)model_refuse(&s->m, "fmi3DeserializeFMUState: out of memory");
     }
-    memcpy(d, serializedState, sizeof(model_data));
+    if (old) {
+        memcpy(old, d, sizeof(model_data));
+        free(d);
+        d = old;
+    }
     *FMUState = d;
     return fmi3OK;
 }

@@ -99,33 +99,49 @@ uint64_t model_state_checksum(const model_data *d)
 
 void model_state_seal(model_data *d) { d->checksum = model_state_checksum(d); }
 
-model_status model_state_check(model_instance *m, const char *fn, const void *bytes, size_t size)
+/* In place, with no copy: a state is about 290 kB, more than the whole stack of a thread
+ * in some importers (musl's default is 128 kB; a copy on the stack here once overflowed
+ * it). */
+model_status model_state_check(model_instance *m, const char *fn, const model_data *d)
 {
-    model_data d;
     const char *flaw;
     char why[128];
-    if (!bytes) return model_null_arg(m, fn, "FMU state");
+    if (!d) return model_null_arg(m, fn, "FMU state");
+    if (d->magic != MODEL_MAGIC || d->layout != MODEL_LAYOUT || d->size != sizeof(model_data))
+        return model_refuse(m, "%s: not a state of this FMU (bad header)", fn);
+    if (memchr(d->token, '\0', sizeof d->token) == NULL ||
+        strcmp(d->token, DJL_INSTANTIATION_TOKEN) != 0)
+        return model_refuse(m, "%s: FMU state made by an FMU with another instantiation token "
+                            "(%.40s), this one is %s", fn, d->token, DJL_INSTANTIATION_TOKEN);
+    if (d->checksum != model_state_checksum(d))
+        return model_refuse(m, "%s: FMU state damaged (checksum mismatch): refused", fn);
+    if (d->state != MS_INSTANTIATED && d->state != MS_INIT && d->state != MS_STEP &&
+        d->state != MS_TERMINATED) {
+        snprintf(why, sizeof why, "state machine value %ld is not one a state can be saved in",
+                 (long)d->state);
+        flaw = why;
+    } else {
+        flaw = model_state_flaw(d);
+    }
+    if (flaw) return model_refuse(m, "%s: FMU state refused: %s", fn, flaw);
+    return ST_OK;
+}
+
+model_status model_state_check_size(model_instance *m, const char *fn, size_t size)
+{
     if (size != sizeof(model_data))
         return model_refuse(m, "%s: FMU state of %lu bytes, expected %lu (made by another version "
                             "of the FMU?)", fn, (unsigned long)size,
                             (unsigned long)sizeof(model_data));
-    memcpy(&d, bytes, sizeof d);
-    if (d.magic != MODEL_MAGIC || d.layout != MODEL_LAYOUT || d.size != sizeof(model_data))
-        return model_refuse(m, "%s: not a state of this FMU (bad header)", fn);
-    if (memchr(d.token, '\0', sizeof d.token) == NULL ||
-        strcmp(d.token, DJL_INSTANTIATION_TOKEN) != 0)
-        return model_refuse(m, "%s: FMU state made by an FMU with another instantiation token "
-                            "(%.40s), this one is %s", fn, d.token, DJL_INSTANTIATION_TOKEN);
-    if (d.checksum != model_state_checksum(&d))
-        return model_refuse(m, "%s: FMU state damaged (checksum mismatch): refused", fn);
-    if (d.state != MS_INSTANTIATED && d.state != MS_INIT && d.state != MS_STEP &&
-        d.state != MS_TERMINATED) {
-        snprintf(why, sizeof why, "state machine value %ld is not one a state can be saved in",
-                 (long)d.state);
-        flaw = why;
-    } else {
-        flaw = model_state_flaw(&d);
-    }
-    if (flaw) return model_refuse(m, "%s: FMU state refused: %s", fn, flaw);
     return ST_OK;
+}
+
+model_status model_state_load(model_instance *m, const char *fn, const void *bytes, size_t size,
+                              model_data *into)
+{
+    model_status st;
+    if (!bytes) return model_null_arg(m, fn, "serializedState");
+    if ((st = model_state_check_size(m, fn, size)) != ST_OK) return st;
+    memcpy(into, bytes, sizeof(model_data));
+    return model_state_check(m, fn, into);
 }

@@ -38,15 +38,23 @@ model_status model_exit_init(model_instance *m); /* the model starts (model_star
 model_status model_terminate(model_instance *m);
 
 /* FMU state: bytes of model_data, sealed with a checksum (model_state_seal)
- * when saved.  model_state_check verifies size, header, checksum, the state
+ * when saved.  model_state_check verifies, in place, a state object the FMU
+ * allocated (an aligned model_data): header, token, checksum, the state
  * machine value and then the structure of everything a restore would bring
  * back (model_state_flaw: counts, indices, ordering, finiteness, outputs
  * consistent with the plan); a refusal is logged (naming fn) and leaves the
- * instance as it was. */
+ * instance as it was.  model_state_load takes serialised bytes (any
+ * alignment): their size (model_state_check_size, also on its own: before
+ * allocating), then the same checks on their copy in into (an allocated
+ * model_data, not to be used if refused).  No state is ever copied to the
+ * stack. */
 size_t model_state_size(void);
 uint64_t model_state_checksum(const model_data *d);
 void model_state_seal(model_data *d);
-model_status model_state_check(model_instance *m, const char *fn, const void *bytes, size_t size);
+model_status model_state_check(model_instance *m, const char *fn, const model_data *d);
+model_status model_state_check_size(model_instance *m, const char *fn, size_t size);
+model_status model_state_load(model_instance *m, const char *fn, const void *bytes, size_t size,
+                              model_data *into);
 
 #if defined(__GNUC__) && __GNUC__ >= 4
 #pragma GCC visibility pop

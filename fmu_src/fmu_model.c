@@ -925,7 +925,7 @@ const char *model_state_flaw(const model_data *d)
     for (i = 0; i < pl->n_steps; i++) {
         const djl_step *st = &pl->step[i];
         /* a motion planned up to the horizon may hold a step a few samples past it */
-        if (st->tau < -2 * DJL_MAX_MOTION_SAMPLES || st->tau > 2 * DJL_MAX_MOTION_SAMPLES ||
+        if (st->tau < -DJL_MAX_PLAN_END || st->tau > DJL_MAX_PLAN_END ||
             !djl_isfinite(st->A) || st->N < 0 || st->N > DJL_MAX_FILTER_SAMPLES ||
             st->stage < 0 || st->stage > 4)
             return "a step of the plan is out of range";
@@ -940,7 +940,7 @@ const char *model_state_flaw(const model_data *d)
     if (pl->n_pieces < 1 || pl->n_pieces > DJL_MAX_PIECES)
         return "the plan's piece count is out of range";
     if (d->cursor < 0 || d->cursor >= pl->n_pieces) return "the piece cursor is out of range";
-    if (pl->k_end < 0 || pl->k_end > DJL_MAX_MOTION_SAMPLES) return "the motion end is out of range";
+    if (pl->k_end < 0 || pl->k_end > DJL_MAX_PLAN_END) return "the motion end is out of range";
     for (i = 0; i < 4; i++)
         if (pl->N[i] < 0 || pl->N[i] > DJL_MAX_FILTER_SAMPLES)
             return "a jerk time in samples is out of range";
@@ -972,6 +972,11 @@ const char *model_state_flaw(const model_data *d)
             jlim += djl_fabs(pl->step[i].A) / ((double)pl->step[i].N * pl->p.Te);
             nmax = pl->step[i].N > nmax ? pl->step[i].N : nmax;
         }
+    /* with jerk times from f_mode, earlier replans may have run ramps of any length the
+     * FMU accepts, which the plan no longer lists (issue 21: the AL velocity of a state
+     * the FMU saved itself, 3.5 % above v_max after ramps of 613 samples, was refused by
+     * an allowance of the current 2-sample jerk times) */
+    if (d->jerk_source != JERK_SOURCE_PARAMETERS) nmax = DJL_MAX_FILTER_SAMPLES;
     jlim *= 1.0 + 1e-9;
     /* the AL profile leads the output by up to a jerk time: a replan's transition may take
      * it past v_max while the output settles within */
@@ -981,7 +986,7 @@ const char *model_state_flaw(const model_data *d)
         double v[7];
         v[0] = pc->x; v[1] = pc->v; v[2] = pc->a; v[3] = pc->j;
         v[4] = pc->x_al; v[5] = pc->v_al; v[6] = pc->a_al;
-        if (pc->k < 0 || pc->k > DJL_MAX_MOTION_SAMPLES || (i > 0 && pc->k < pl->piece[i - 1].k))
+        if (pc->k < 0 || pc->k > DJL_MAX_PLAN_END || (i > 0 && pc->k < pl->piece[i - 1].k))
             return "the plan's pieces are not in order";
         if (pc->seg < 0 || pc->seg > pl->n_segments) return "a piece's segment is out of range";
         if (pc->stage < 0 || pc->stage > 4) return "a piece's stage is out of range";

@@ -489,6 +489,66 @@ static int beyond_documented_limits(const djl_params *p)
     return T / p->Te > 1e14;
 }
 
+/* Found by fuzz_plan (issue 21; tests/fuzz/corpus/plan/crash_issue21_*), every run: each
+ * was an internal error. */
+static void issue21_cases(void)
+{
+    djl_params p;
+    djl_error e;
+    djl_status st;
+    int i;
+    /* 17 segments, the last 0.05 m to 6e11 m/s (AL, Te = 0.05 s): its rounding residual,
+     * half a sample of travel at 6e11 m/s, is taken up by an earlier segment (documented);
+     * the axis goes through -1.5e10 m, and the self-check compared the landing's rounding
+     * with the distances only */
+    djl_params_default(&p);
+    p.profile = DJL_PROFILE_AL;
+    p.Te = 0.05;
+    p.x0 = p.v0 = 0.05;
+    p.v_max = p.a_max = 869626356546304.38;
+    p.d_max = 1.0;
+    p.n_segments = 17;
+    for (i = 0; i < 17; i++) p.seg_distance[i] = i < 9 ? 1.19 : 0.05;
+    p.seg_distance[10] = 0.0;
+    p.seg_distance[14] = -0.11;
+    p.seg_v_end[16] = 6e11;
+    if ((st = djl_plan_motion(&p, &plan, &e)) != DJL_OK)
+        FAIL("issue 21, 6e11 m/s at the end: %s: %s", djl_status_name(st), e.message);
+    else
+        check_plan(-1, &p);
+    /* an empty last segment handed a residual of 4e-4 m that a_max = 7e-307 m/s^2 cannot
+     * cover in a plan's samples: infeasible, naming a_max */
+    djl_params_default(&p);
+    p.profile = DJL_PROFILE_DJL;
+    p.short_stage = DJL_SHORT_OVERLAP;
+    p.v0 = 1.0;
+    p.v_max = 1.0;
+    p.a_max = 7.0663478397123231e-307;
+    p.d_max = 10.0;
+    p.T_F[2] = 0.218;
+    p.T_F[3] = 0.05;
+    p.n_segments = 4;
+    p.seg_distance[0] = p.seg_distance[1] = 0.999;
+    p.seg_v_end[0] = p.seg_v_end[1] = 0.999;
+    p.seg_distance[2] = 0.61;
+    st = djl_plan_motion(&p, &plan, &e);
+    if (st != DJL_E_INFEASIBLE || strcmp(e.param, "a_max") != 0 || !strstr(e.message, "passes on"))
+        FAIL("issue 21, residual into an empty segment: %s %s: %s", djl_status_name(st), e.param,
+             e.message);
+    /* 1e15 m from 0.5 m/s with a_max = 1e-300 m/s^2: 2e18 samples, refused (the bound of
+     * the duration rounded the peak to 0.5 m/s and counted 0) */
+    djl_params_default(&p);
+    p.short_stage = DJL_SHORT_OVERLAP;
+    p.v0 = 0.5;
+    p.v_max = 6e11;
+    p.a_max = 1e-300;
+    p.distance = 1e15;
+    st = djl_plan_motion(&p, &plan, &e);
+    if (st != DJL_E_INFEASIBLE || strcmp(e.param, "a_max") != 0 || !strstr(e.message, "2e+18"))
+        FAIL("issue 21, 1e15 m at a_max = 1e-300: %s %s: %s", djl_status_name(st), e.param,
+             e.message);
+}
+
 /* The cases of issue #10 item 6, every run. */
 static void issue_cases(void)
 {
@@ -543,6 +603,7 @@ static void issue_cases(void)
     st = djl_plan_motion(&p, &plan, &e);
     if (st != DJL_E_PARAM || strcmp(e.param, "x0") != 0)
         FAIL("issue case 4 (x0): %s %s: %s", djl_status_name(st), e.param, e.message);
+    issue21_cases();
 }
 
 /* The parameters of a failing case, to reproduce it. */

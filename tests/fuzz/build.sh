@@ -14,7 +14,8 @@ CC=${CC:-clang}
 FMI=$(python -c 'from harness.fmu.build import fmi_include_dir; print(fmi_include_dir())')
 mkdir -p "$OUT"
 FLAGS="-std=c99 -g -O1 -Wall -Wextra -Wpedantic -Werror -Ifmu_src -I$FMI
-       -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
+       -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+       -fsanitize-coverage-ignorelist=tests/fuzz/coverage_ignore.txt"
 CORE="fmu_src/djl_validate.c fmu_src/djl_segment.c fmu_src/djl_motion.c fmu_src/djl_replan.c
       fmu_src/djl_eval.c fmu_src/djl_shaper.c"
 FMU="fmu_src/fmu_base.c fmu_src/fmu_model.c fmu_src/fmu_instance.c"
