@@ -40,12 +40,48 @@ typedef struct {
     int kl;         /* lengths in units of 2^kl m (djl_plan_motion's rescaled retry) */
 } motion_work;
 
+/* More samples than a plan may hold (with the bound's rounding). */
+static const double too_many_samples = (double)DJL_MAX_MOTION_SAMPLES * (1.0 + 1e-9);
+
+/* The fewest samples of Te any profile from vs to ve over D takes, in *na
+ * accelerating and *nd decelerating (a lower bound).  Whatever the velocity
+ * limit, no profile is faster than accelerating at a_max to v* and
+ * decelerating at d_max to ve, with
+ *     v*^2 = (d vs^2 + a ve^2 + 2 D a d) / (a + d),
+ * and when v* < max(vs, ve) (no room to go above both) none is faster than
+ * the change of velocity at its limit, nor than what a_max allows from vs
+ * (vs T + a T^2/2 >= D) and d_max towards ve.  The generated profile is such
+ * a profile (its acceleration stays within the limits).  (Computed without
+ * overflow: a and d may be 1e-300 or 1e300.) */
+static void least_samples(double D, double vs, double ve, double am, double dm, double Te,
+                          double *na, double *nd)
+{
+    double vt = peak_without_velocity_limit(D, vs, ve, am, dm);
+    if (vt >= vs && vt >= ve) {
+        /* (vt - vs) / am and (vt - ve) / dm without their cancellation: with a_max
+         * = 1e-300 m/s^2 vt rounds to vs, and a cruise of 10^18 samples counted 0
+         * (issue 21: 1e15 m from 0.5 m/s was an internal error, not refused).  With
+         * r = am / (am + dm):
+         *   (vt - vs) / am = ((ve^2 - vs^2) / (am + dm) + 2 D (1 - r)) / (vt + vs),
+         *   (vt - ve) / dm = ((vs^2 - ve^2) / (am + dm) + 2 D r) / (vt + ve). */
+        double r = 1.0 / (1.0 + dm / am), sum = am + dm; /* sum = inf: those terms are 0 */
+        double ta = ((ve - vs) * ((ve + vs) / sum) + 2.0 * D * (1.0 - r)) / (vt + vs);
+        double td = ((vs - ve) * ((vs + ve) / sum) + 2.0 * D * r) / (vt + ve);
+        if (!(ta >= 0.0) || !(vt + vs > 0.0)) ta = (vt - vs) / am; /* vt = vs = 0: underflow */
+        if (!(td >= 0.0) || !(vt + ve > 0.0)) td = (vt - ve) / dm;
+        *na = ta / Te;
+        *nd = td / Te;
+    } else {
+        double Ta = 2.0 * D / (vs + djl_hypot(vs, djl_sqrt(2.0 * am) * djl_sqrt(D)));
+        double Td = 2.0 * D / (ve + djl_hypot(ve, djl_sqrt(2.0 * dm) * djl_sqrt(D)));
+        *na = dmax2(Ta, ve > vs ? (ve - vs) / am : 0.0) / Te;
+        *nd = dmax2(Td, ve > vs ? 0.0 : (vs - ve) / dm) / Te;
+    }
+}
+
 /* Error for segment i, planned in the frame of its direction with the
  * distance c->D (the user's distance plus what the rounding of the earlier
  * segments passed on); dmin is the shortest distance that frame allows. */
-static void least_samples(double D, double vs, double ve, double am, double dm, double Te,
-                          double *na, double *nd);
-
 static djl_status infeasible(djl_error *err, const djl_params *p, int i, const segment_problem *c,
                              double dmin, int kl)
 {
@@ -72,17 +108,17 @@ static djl_status infeasible(djl_error *err, const djl_params *p, int i, const s
          * samples a plan may hold, the limits are too low for the residual: infeasible
          * (issue 21: a_max = 1e-30 m/s^2 and a residual of 6e-4 m into an empty last
          * segment, a_max = 1e-300 m/s^2 with Te = 4e154 s, were internal errors) */
-        double na, nd, lim = (double)DJL_MAX_MOTION_SAMPLES * (1.0 + 1e-9), R;
+        double na, nd;
         least_samples(c->D, c->vs, c->ve, c->am, c->dm, c->Te, &na, &nd);
-        R = djl_ldexp(c->D, -kl) - djl_fabs(D);
-        if (na + nd > lim)
+        if (na + nd > too_many_samples)
             return set_error(err, DJL_E_INFEASIBLE, na >= nd ? "a_max" : "d_max",
                              na >= nd ? p->a_max : p->d_max,
                              "%s = %g m from %g m/s to %g m/s: the rounding of the segments "
                              "before it to whole samples passes on %g m (half a sample of "
                              "travel at their speed at most), which a_max = %g m/s2 and "
                              "d_max = %g m/s2 cannot cover in the %g samples of Te = %g s a "
-                             "plan may hold (it needs %g)", dname, D, vs, ve, R, p->a_max,
+                             "plan may hold (it needs %g)", dname, D, vs, ve,
+                             djl_ldexp(c->D, -kl) - djl_fabs(D), p->a_max,
                              p->d_max, (double)DJL_MAX_MOTION_SAMPLES, p->Te, na + nd);
         /* theory says a profile exists (docs/generator.md): a planner limitation */
         return set_error(err, DJL_E_INTERNAL, dname, D,
@@ -234,55 +270,20 @@ static djl_status land_last_segment(motion_work *w, int n, djl_error *err)
     return infeasible(err, w->user, L, c, dmin, w->kl);
 }
 
-/* A move that the acceleration limits make longer than a plan may hold.
- * Whatever the velocity limit, no profile from vs to ve over D is faster than
- * accelerating at a_max to v* and decelerating at d_max to ve, with
- *     v*^2 = (d vs^2 + a ve^2 + 2 D a d) / (a + d),
- * and when v* < max(vs, ve) (no room to go above both) none is faster than
- * the change of velocity at its limit, nor than what a_max allows from vs
- * (vs T + a T^2/2 >= D) and d_max towards ve.  The generated profile is such
- * a profile (its acceleration stays within the limits), so a move whose bound
- * exceeds DJL_MAX_MOTION_SAMPLES cannot be planned: it is refused here,
- * naming the limit that takes the longer part.  (Computed without overflow:
- * a and d may be 1e-300 or 1e300.) */
-static void least_samples(double D, double vs, double ve, double am, double dm, double Te,
-                          double *na, double *nd)
-{
-    double vt = peak_without_velocity_limit(D, vs, ve, am, dm);
-    if (vt >= vs && vt >= ve) {
-        /* (vt - vs) / am and (vt - ve) / dm without their cancellation: with a_max
-         * = 1e-300 m/s^2 vt rounds to vs, and a cruise of 10^18 samples counted 0
-         * (issue 21: 1e15 m from 0.5 m/s was an internal error, not refused).  With
-         * r = am / (am + dm):
-         *   (vt - vs) / am = ((ve^2 - vs^2) / (am + dm) + 2 D (1 - r)) / (vt + vs),
-         *   (vt - ve) / dm = ((vs^2 - ve^2) / (am + dm) + 2 D r) / (vt + ve). */
-        double r = 1.0 / (1.0 + dm / am), sum = am + dm; /* sum = inf: those terms are 0 */
-        double ta = ((ve - vs) * ((ve + vs) / sum) + 2.0 * D * (1.0 - r)) / (vt + vs);
-        double td = ((vs - ve) * ((vs + ve) / sum) + 2.0 * D * r) / (vt + ve);
-        if (!(ta >= 0.0) || !(vt + vs > 0.0)) ta = (vt - vs) / am; /* vt = vs = 0: underflow */
-        if (!(td >= 0.0) || !(vt + ve > 0.0)) td = (vt - ve) / dm;
-        *na = ta / Te;
-        *nd = td / Te;
-    } else {
-        double Ta = 2.0 * D / (vs + djl_hypot(vs, djl_sqrt(2.0 * am) * djl_sqrt(D)));
-        double Td = 2.0 * D / (ve + djl_hypot(ve, djl_sqrt(2.0 * dm) * djl_sqrt(D)));
-        *na = dmax2(Ta, ve > vs ? (ve - vs) / am : 0.0) / Te;
-        *nd = dmax2(Td, ve > vs ? 0.0 : (vs - ve) / dm) / Te;
-    }
-}
-
+/* A move that the acceleration limits make longer than a plan may hold (its
+ * least_samples beyond DJL_MAX_MOTION_SAMPLES) cannot be planned: it is
+ * refused here, naming the limit that takes the longer part. */
 static djl_status check_duration(const djl_params *p, int i, djl_error *err)
 {
     double Dr = p->n_segments == 0 ? p->distance : p->seg_distance[i];
     double vE = p->n_segments == 0 ? p->v_e : p->seg_v_end[i];
     double vS = i == 0 ? p->v0 : p->seg_v_end[i - 1];
     double sg = Dr < 0.0 ? -1.0 : 1.0, D = djl_fabs(Dr), vs = sg * vS, ve = sg * vE, Te = p->Te;
-    double am = p->a_max, dm = p->d_max, lim = (double)DJL_MAX_MOTION_SAMPLES * (1.0 + 1e-9);
-    double na, nd;
+    double am = p->a_max, dm = p->d_max, na, nd;
     char dname[40];
     if (!(D > 0.0)) return DJL_OK;
     least_samples(D, vs, ve, am, dm, Te, &na, &nd);
-    if (!(na + nd > lim)) return DJL_OK;
+    if (!(na + nd > too_many_samples)) return DJL_OK;
     if (p->n_segments == 0)
         snprintf(dname, sizeof dname, "distance");
     else

@@ -211,7 +211,8 @@ def test_the_fmu_accepts_every_state_it_saves(tmp_path):
     parameters; commands, f_mode jerk times, input shapers, FMU states saved, serialised,
     restored and replayed), the FMI 2 binary against itself: every state the FMU saves is
     accepted back.  Before issue 21's second session, 3 of these 3000 were refused: the
-    motion end of a stop at d_max = 3e-27 m/s^2 (1.6e15 samples: the stop is now refused),
+    motion end of a stop at d_max = 3e-27 m/s^2 (squeezed into 10^15 samples, past the
+    horizon: such a stop is now refused),
     and an AL velocity 3.5 % above v_max after f_mode's jerk times changed from 613 to 2
     samples (the allowance now covers the jerk times f_mode may have given)."""
     if shutil.which("gcc") is None:
