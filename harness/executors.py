@@ -125,6 +125,25 @@ def _quiet_cancelled_pool_errors() -> None:
     threading.excepthook = hook
 
 
+#: Seconds an interrupted pool's manager thread is given to wind the pool down.
+MANAGER_JOIN_TIMEOUT = 30.0
+
+
+def _join_pool_manager(manager: threading.Thread) -> None:
+    """Wait for an interrupted pool's manager thread to end (at most :data:`MANAGER_JOIN_TIMEOUT`).
+
+    ``shutdown(wait=False)`` returns while the manager thread is still closing the pool.
+    Python 3.11's exit hook (``concurrent.futures.process._python_exit``) then writes to
+    the manager's wake-up pipe while that thread may be closing it, and prints
+    ``OSError: [Errno 9] Bad file descriptor`` with a traceback after the command's last
+    line (a race: CPython closes the pipe without the lock the hook would need).  Once the
+    manager thread has ended the pipe is marked closed and the hook does nothing.  The hook
+    joins that thread anyway, so waiting here costs no time at exit; it only puts the wait
+    before the command's message rather than after it.
+    """
+    manager.join(MANAGER_JOIN_TIMEOUT)
+
+
 class _ProcessPool(ProcessPoolExecutor):
     """A process pool that says how many processes it has."""
 
@@ -245,10 +264,13 @@ def make_executor(workers: int | None = None, scheduler: str | None = None, *,
             yield ex
             ok = True
         finally:
-            # on an error or an interrupt, drop the queued tasks and do not wait
+            # on an error or an interrupt, drop the queued tasks and do not wait for them
+            manager = getattr(ex, "_executor_manager_thread", None)
             if not ok and isinstance(ex, ProcessPoolExecutor):
                 _quiet_cancelled_pool_errors()
             ex.shutdown(wait=ok, cancel_futures=not ok)
+            if not ok and isinstance(manager, threading.Thread):
+                _join_pool_manager(manager)
         return
     if workers is not None:
         raise ExecutorError("give either a number of local workers or a Dask scheduler, not "

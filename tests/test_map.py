@@ -241,6 +241,40 @@ def test_executors():
             pass
 
 
+class _StopError(Exception):
+    pass
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="kills the workers with SIGKILL")
+def test_an_interrupted_pool_is_wound_down_before_make_executor_returns():
+    """After an interrupt the pool's manager thread has ended when ``make_executor`` exits.
+
+    Otherwise Python 3.11's exit hook may write to the manager's wake-up pipe while that
+    thread closes it, printing "OSError: [Errno 9] Bad file descriptor" after the
+    command's message (seen once in CI, test_sigterm_to_a_pooled_map_exits_quietly).
+    """
+    import os
+    import signal
+
+    from harness.executors import make_executor
+
+    with pytest.raises(_StopError):
+        with make_executor(workers=2) as ex:
+            futs = [ex.submit(time.sleep, 30.0) for _ in range(6)]
+            deadline = time.monotonic() + 30
+            while len(ex._processes) < 2 and time.monotonic() < deadline:  # type: ignore[attr-defined]
+                time.sleep(0.05)
+            manager = ex._executor_manager_thread  # type: ignore[attr-defined]
+            wakeup = ex._executor_manager_thread_wakeup  # type: ignore[attr-defined]
+            assert manager is not None and manager.is_alive()
+            for pid in list(ex._processes):  # type: ignore[attr-defined]
+                os.kill(pid, signal.SIGKILL)  # the workers die with the group, as on SIGTERM
+            raise _StopError
+    assert not manager.is_alive()
+    assert wakeup._closed  # the exit hook's wakeup() is then a no-op
+    assert all(f.done() for f in futs)
+
+
 def _closed_port() -> int:
     s = socket.socket()
     s.bind(("127.0.0.1", 0))
