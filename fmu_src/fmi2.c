@@ -248,21 +248,26 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 
 /* ------------------------------------------------------------- FMU state */
 
+/* A state object: the instance's data packed (fmu_instance.h), allocated with the
+ * importer's allocateMemory at its size; a state to overwrite of another size is replaced
+ * (the new one allocated first: a failure leaves the old one). */
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
     inst2 *s = INST(c);
-    model_data *d;
+    void *d, *old;
+    size_t size;
     CHECK(c, "fmi2GetFMUstate", MASK_FMUSTATE);
     NEED(c, "fmi2GetFMUstate", FMUstate);
-    d = (model_data *)*FMUstate;
-    if (d && model_state_check(&s->m, "fmi2GetFMUstate (state to overwrite)", d) != ST_OK)
+    old = d = *FMUstate;
+    if (old && model_state_check(&s->m, "fmi2GetFMUstate (state to overwrite)", old) != ST_OK)
         return fmi2Error;
-    if (!d) {
-        d = (model_data *)s->cb.allocateMemory(1, sizeof(model_data));
+    size = model_state_size(&s->m.d);
+    if (!old || model_state_stored_size(old) != size) {
+        d = s->cb.allocateMemory(1, size);
         if (!d) return (fmi2Status)model_refuse(&s->m, "fmi2GetFMUstate: out of memory");
+        if (old) s->cb.freeMemory(old);
     }
-    memcpy(d, &s->m.d, sizeof(model_data));
-    model_state_seal(d);
+    model_state_pack(&s->m.d, d);
     *FMUstate = d;
     return fmi2OK;
 }
@@ -271,9 +276,8 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 {
     inst2 *s = INST(c);
     CHECK(c, "fmi2SetFMUstate", MASK_RESTORE);
-    if (model_state_check(&s->m, "fmi2SetFMUstate", (const model_data *)FMUstate) != ST_OK)
-        return fmi2Error;
-    memcpy(&s->m.d, FMUstate, sizeof(model_data));
+    if (model_state_check(&s->m, "fmi2SetFMUstate", FMUstate) != ST_OK) return fmi2Error;
+    model_state_restore(&s->m);
     return fmi2OK;
 }
 
@@ -290,10 +294,13 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size)
 {
+    inst2 *s = INST(c);
     CHECK(c, "fmi2SerializedFMUstateSize", MASK_FMUSTATE);
     NEED(c, "fmi2SerializedFMUstateSize", FMUstate);
     NEED(c, "fmi2SerializedFMUstateSize", size);
-    *size = model_state_size();
+    if (model_state_check(&s->m, "fmi2SerializedFMUstateSize", FMUstate) != ST_OK)
+        return fmi2Error;
+    *size = model_state_stored_size(FMUstate);
     return fmi2OK;
 }
 
@@ -301,16 +308,15 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
                                  size_t size)
 {
     inst2 *s = INST(c);
+    size_t need;
     CHECK(c, "fmi2SerializeFMUstate", MASK_FMUSTATE);
-    if (model_state_check(&s->m, "fmi2SerializeFMUstate",
-                          (const model_data *)FMUstate) != ST_OK)
-        return fmi2Error;
+    if (model_state_check(&s->m, "fmi2SerializeFMUstate", FMUstate) != ST_OK) return fmi2Error;
     NEED(c, "fmi2SerializeFMUstate", serializedState);
-    if (size < model_state_size())
+    need = model_state_stored_size(FMUstate);
+    if (size < need)
         return (fmi2Status)model_refuse(&s->m, "fmi2SerializeFMUstate: buffer of %lu bytes, %lu "
-                                        "needed", (unsigned long)size,
-                                        (unsigned long)model_state_size());
-    memcpy(serializedState, FMUstate, model_state_size());
+                                        "needed", (unsigned long)size, (unsigned long)need);
+    memcpy(serializedState, FMUstate, need);
     return fmi2OK;
 }
 
@@ -318,28 +324,26 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
                                    fmi2FMUstate *FMUstate)
 {
     inst2 *s = INST(c);
-    model_data *d, *old;
+    void *d, *old;
     CHECK(c, "fmi2DeSerializeFMUstate", MASK_RESTORE);
     NEED(c, "fmi2DeSerializeFMUstate", FMUstate);
     NEED(c, "fmi2DeSerializeFMUstate", serializedState);
-    old = (model_data *)*FMUstate;
+    old = *FMUstate;
     if (old &&
         model_state_check(&s->m, "fmi2DeSerializeFMUstate (state to overwrite)", old) != ST_OK)
         return fmi2Error;
-    if (model_state_check_size(&s->m, "fmi2DeSerializeFMUstate", size) != ST_OK) return fmi2Error;
-    /* the bytes are checked in a new state object (aligned, off the stack); a state to
-     * overwrite is overwritten only with bytes that passed */
-    d = (model_data *)s->cb.allocateMemory(1, sizeof(model_data));
-    if (!d) return (fmi2Status)model_refuse(&s->m, "fmi2DeSerializeFMUstate: out of memory");
-    if (model_state_load(&s->m, "fmi2DeSerializeFMUstate", serializedState, size, d) != ST_OK) {
-        s->cb.freeMemory(d);
+    /* the bytes are checked where they are (any alignment); a state to overwrite is
+     * replaced only by bytes that passed, and kept if its size is theirs */
+    if (model_state_load(&s->m, "fmi2DeSerializeFMUstate", serializedState, size) != ST_OK)
         return fmi2Error;
-    }
-    if (old) {
-        memcpy(old, d, sizeof(model_data));
-        s->cb.freeMemory(d);
+    if (old && model_state_stored_size(old) == size) {
         d = old;
+    } else {
+        d = s->cb.allocateMemory(1, size);
+        if (!d) return (fmi2Status)model_refuse(&s->m, "fmi2DeSerializeFMUstate: out of memory");
+        if (old) s->cb.freeMemory(old);
     }
+    memcpy(d, serializedState, size);
     *FMUstate = d;
     return fmi2OK;
 }

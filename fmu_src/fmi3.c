@@ -468,21 +468,26 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference
 
 /* ------------------------------------------------------------- FMU state */
 
+/* A state object: the instance's data packed (fmu_instance.h), malloc'd at its size; a
+ * state to overwrite of another size is replaced (the new one allocated first: a failure
+ * leaves the old one). */
 fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
 {
     inst3 *s = INST(instance);
-    model_data *d;
+    void *d, *old;
+    size_t size;
     CHECK(instance, "fmi3GetFMUState", MASK_FMUSTATE);
     NEED(instance, "fmi3GetFMUState", FMUState);
-    d = (model_data *)*FMUState;
-    if (d && model_state_check(&s->m, "fmi3GetFMUState (state to overwrite)", d) != ST_OK)
+    old = d = *FMUState;
+    if (old && model_state_check(&s->m, "fmi3GetFMUState (state to overwrite)", old) != ST_OK)
         return fmi3Error;
-    if (!d) {
-        d = (model_data *)malloc(sizeof(model_data));
+    size = model_state_size(&s->m.d);
+    if (!old || model_state_stored_size(old) != size) {
+        d = malloc(size);
         if (!d) return (fmi3Status)model_refuse(&s->m, "fmi3GetFMUState: out of memory");
+        free(old);
     }
-    memcpy(d, &s->m.d, sizeof(model_data));
-    model_state_seal(d);
+    model_state_pack(&s->m.d, d);
     *FMUState = d;
     return fmi3OK;
 }
@@ -491,9 +496,8 @@ fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState)
 {
     inst3 *s = INST(instance);
     CHECK(instance, "fmi3SetFMUState", MASK_RESTORE);
-    if (model_state_check(&s->m, "fmi3SetFMUState", (const model_data *)FMUState) != ST_OK)
-        return fmi3Error;
-    memcpy(&s->m.d, FMUState, sizeof(model_data));
+    if (model_state_check(&s->m, "fmi3SetFMUState", FMUState) != ST_OK) return fmi3Error;
+    model_state_restore(&s->m);
     return fmi3OK;
 }
 
@@ -509,10 +513,13 @@ fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
 
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState FMUState, size_t *size)
 {
+    inst3 *s = INST(instance);
     CHECK(instance, "fmi3SerializedFMUStateSize", MASK_FMUSTATE);
     NEED(instance, "fmi3SerializedFMUStateSize", FMUState);
     NEED(instance, "fmi3SerializedFMUStateSize", size);
-    *size = model_state_size();
+    if (model_state_check(&s->m, "fmi3SerializedFMUStateSize", FMUState) != ST_OK)
+        return fmi3Error;
+    *size = model_state_stored_size(FMUState);
     return fmi3OK;
 }
 
@@ -520,16 +527,15 @@ fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState,
                                  fmi3Byte serializedState[], size_t size)
 {
     inst3 *s = INST(instance);
+    size_t need;
     CHECK(instance, "fmi3SerializeFMUState", MASK_FMUSTATE);
-    if (model_state_check(&s->m, "fmi3SerializeFMUState",
-                          (const model_data *)FMUState) != ST_OK)
-        return fmi3Error;
+    if (model_state_check(&s->m, "fmi3SerializeFMUState", FMUState) != ST_OK) return fmi3Error;
     NEED(instance, "fmi3SerializeFMUState", serializedState);
-    if (size < model_state_size())
+    need = model_state_stored_size(FMUState);
+    if (size < need)
         return (fmi3Status)model_refuse(&s->m, "fmi3SerializeFMUState: buffer of %lu bytes, %lu "
-                                        "needed", (unsigned long)size,
-                                        (unsigned long)model_state_size());
-    memcpy(serializedState, FMUState, model_state_size());
+                                        "needed", (unsigned long)size, (unsigned long)need);
+    memcpy(serializedState, FMUState, need);
     return fmi3OK;
 }
 
@@ -537,28 +543,26 @@ fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte seriali
                                    size_t size, fmi3FMUState *FMUState)
 {
     inst3 *s = INST(instance);
-    model_data *d, *old;
+    void *d, *old;
     CHECK(instance, "fmi3DeserializeFMUState", MASK_RESTORE);
     NEED(instance, "fmi3DeserializeFMUState", FMUState);
     NEED(instance, "fmi3DeserializeFMUState", serializedState);
-    old = (model_data *)*FMUState;
+    old = *FMUState;
     if (old &&
         model_state_check(&s->m, "fmi3DeserializeFMUState (state to overwrite)", old) != ST_OK)
         return fmi3Error;
-    if (model_state_check_size(&s->m, "fmi3DeserializeFMUState", size) != ST_OK) return fmi3Error;
-    /* the bytes are checked in a new state object (aligned, off the stack); a state to
-     * overwrite is overwritten only with bytes that passed */
-    d = (model_data *)malloc(sizeof(model_data));
-    if (!d) return (fmi3Status)model_refuse(&s->m, "fmi3DeserializeFMUState: out of memory");
-    if (model_state_load(&s->m, "fmi3DeserializeFMUState", serializedState, size, d) != ST_OK) {
-        free(d);
+    /* the bytes are checked where they are (any alignment); a state to overwrite is
+     * replaced only by bytes that passed, and kept if its size is theirs */
+    if (model_state_load(&s->m, "fmi3DeserializeFMUState", serializedState, size) != ST_OK)
         return fmi3Error;
-    }
-    if (old) {
-        memcpy(old, d, sizeof(model_data));
-        free(d);
+    if (old && model_state_stored_size(old) == size) {
         d = old;
+    } else {
+        d = malloc(size);
+        if (!d) return (fmi3Status)model_refuse(&s->m, "fmi3DeserializeFMUState: out of memory");
+        free(old);
     }
+    memcpy(d, serializedState, size);
     *FMUState = d;
     return fmi3OK;
 }

@@ -52,7 +52,7 @@ const char *model_state_name(int state);
 /* the data of an instance                                                  */
 
 #define MODEL_MAGIC 0x4a4c4446u /* "FDLJ" */
-#define MODEL_LAYOUT 5u          /* of model_data: a state of another layout is refused */
+#define MODEL_LAYOUT 6u          /* of model_data: a state of another layout is refused */
 
 /* The figures of the parametric move planned at initialisation (the calculated
  * parameters motion_time, N_F1..N_F4, v_reached, a_reached, d_reached): commands
@@ -64,16 +64,16 @@ typedef struct {
 } plan_summary;
 
 /* All the data of an instance that an FMU state must capture: plain values, no
- * pointers, so an FMU state is a copy of it and serialising it is a memcpy.  Its
- * first fields are the FMU state's header, which the instance (fmu_instance.c)
+ * pointers, so an FMU state is a copy of it (packed: the shaper's rings hold only their
+ * live entries, fmu_instance.c) and serialising it is a memcpy.  Its first fields are the FMU state's header, which the instance (fmu_instance.c)
  * fills and checks; the rest is the model's (fmu_model.c). */
 typedef struct {
     /* the FMU state's header (fmu_instance.c) */
     uint32_t magic;
     uint32_t layout;
-    uint32_t size;          /* sizeof(model_data), checked on deserialisation */
+    uint32_t size;          /* a saved state's size in bytes (packed: fmu_instance.c) */
     int32_t state;          /* model_state */
-    uint64_t checksum;      /* FNV-1a 64 of all the other bytes, set in a saved FMU state */
+    uint64_t checksum;      /* FNV-1a 64 of a saved state's other bytes */
     char token[48];         /* instantiation token of the FMU that made the state */
     /* the model (fmu_model.c) */
     djl_params p;
@@ -133,6 +133,7 @@ typedef struct model_instance {
     int logging_on;
     int category_on[DJL_LOG_N];
     model_work w; /* the model's work space */
+    model_data load; /* a state being checked, unpacked (model_state_check, model_state_load) */
 } model_instance;
 
 /* ------------------------------------------------------------------------ */

@@ -22,13 +22,21 @@ int model_allowed(model_instance *m, const char *fn, int mask)
     return 0;
 }
 
-/* A fresh state: the header, state Instantiated, the model's start values. */
+/* The bytes of model_data a state holds before the live entries of the shaper's rings
+ * (see "FMU state" below). */
+#define PACK_HEAD (offsetof(model_data, mem) + offsetof(djl_shaper_memory, past))
+
+/* A fresh state: the header, state Instantiated, the model's start values.  Zeroed up to
+ * the rings' entries, padding included (a state is checksummed whole); the entries are
+ * never read beyond the rings' counts, so the rest is not touched (293 kB of an
+ * instance's 620 kB, with m->load: memory the importer's calloc gave and that stays
+ * unmapped until a shaper or a state restore uses it). */
 static void defaults(model_data *d)
 {
-    memset(d, 0, sizeof(*d)); /* padding included: a state is checksummed whole */
+    memset(d, 0, PACK_HEAD);
     d->magic = MODEL_MAGIC;
     d->layout = MODEL_LAYOUT;
-    d->size = (uint32_t)sizeof(model_data);
+    d->size = 0; /* in a saved state: its size in bytes (model_state_pack) */
     strncpy(d->token, DJL_INSTANTIATION_TOKEN, sizeof(d->token) - 1);
     d->state = MS_INSTANTIATED;
     model_defaults(d);
@@ -38,10 +46,11 @@ void model_init(model_instance *m, int fmi_version, const char *instance_name,
                 model_logger logger, void *logger_env, int logging_on)
 {
     int i;
-    memset(m, 0, sizeof(*m));
     defaults(&m->d);
+    memset(&m->w, 0, sizeof m->w); /* every field but the rings' entries and m->load */
     m->fmi_version = fmi_version;
-    strncpy(m->instance_name, instance_name ? instance_name : "", sizeof(m->instance_name) - 1);
+    strncpy(m->instance_name, instance_name ? instance_name : "", sizeof(m->instance_name));
+    m->instance_name[sizeof(m->instance_name) - 1] = '\0';
     m->logger = logger;
     m->logger_env = logger_env;
     m->logging_on = logging_on;
@@ -73,22 +82,46 @@ model_status model_terminate(model_instance *m)
 /* ------------------------------------------------------------------------ */
 /* FMU state                                                                */
 
-size_t model_state_size(void) { return sizeof(model_data); }
+/* A state is packed: the bytes of model_data up to the entries of the shaper's rings
+ * (the header, the model's values, the rings' counts), then the live entries of each
+ * ring in time order (a ring packed starts at 0: past_first = phase_first = 0).  The
+ * rings take 263 kB of model_data and are empty unless a shaper keeps a replaced plan's
+ * past or follows f_mode, so a state is about 30 kB, not 293 kB. */
+#define PAST_BYTES sizeof(djl_past_piece)
+#define PHASE_BYTES sizeof(djl_phase_point)
+#define MEM_FIELD(f) (offsetof(model_data, mem) + offsetof(djl_shaper_memory, f))
 
-/* model_state_checksum reads whole words: the checksum is one of them, the state all of them. */
+/* model_state_checksum reads whole words: the checksum is one of them, a state all of them. */
 typedef char model_state_words_check[(offsetof(model_data, checksum) % 8 == 0 &&
-                                      sizeof(model_data) % 8 == 0) ? 1 : -1];
+                                      PACK_HEAD % 8 == 0 && PAST_BYTES % 8 == 0 &&
+                                      PHASE_BYTES % 8 == 0) ? 1 : -1];
 
-/* 64-bit FNV-1a over the 8-byte words of the state but the checksum itself (the padding is
- * included: model_data is zeroed before use and copied whole), a word at a time: each step
- * (h ^ w) * prime is a bijection of h and of w, so a change of any one word always changes
- * the checksum.  Word-wise, because the state holds the shaper's memory (about 260 kB). */
-uint64_t model_state_checksum(const model_data *d)
+size_t model_state_size(const model_data *d)
 {
-    const unsigned char *b = (const unsigned char *)d;
+    return PACK_HEAD + (size_t)d->mem.n_past * PAST_BYTES + (size_t)d->mem.n_phase * PHASE_BYTES;
+}
+
+size_t model_state_max_size(void) { return PACK_HEAD + DJL_SHAPER_RING * (PAST_BYTES + PHASE_BYTES); }
+
+static uint32_t read_u32(const void *state, size_t at)
+{
+    uint32_t x;
+    memcpy(&x, (const unsigned char *)state + at, 4);
+    return x;
+}
+
+size_t model_state_stored_size(const void *state) { return read_u32(state, offsetof(model_data, size)); }
+
+/* 64-bit FNV-1a over the 8-byte words of a packed state but the checksum itself (the
+ * padding of model_data included: it is zeroed before use and copied whole), a word at a
+ * time: each step (h ^ w) * prime is a bijection of h and of w, so a change of any one
+ * word always changes the checksum.  Any alignment. */
+uint64_t model_state_checksum(const void *state, size_t size)
+{
+    const unsigned char *b = (const unsigned char *)state;
     size_t i, skip = offsetof(model_data, checksum);
     uint64_t h = 0xcbf29ce484222325u, w;
-    for (i = 0; i + 8 <= sizeof(model_data); i += 8) {
+    for (i = 0; i + 8 <= size; i += 8) {
         if (i == skip) continue;
         memcpy(&w, b + i, 8);
         h ^= w;
@@ -97,51 +130,115 @@ uint64_t model_state_checksum(const model_data *d)
     return h;
 }
 
-void model_state_seal(model_data *d) { d->checksum = model_state_checksum(d); }
+void model_state_seal(void *state, size_t size)
+{
+    uint64_t h = model_state_checksum(state, size);
+    memcpy((unsigned char *)state + offsetof(model_data, checksum), &h, 8);
+}
 
-/* In place, with no copy: a state is about 290 kB, more than the whole stack of a thread
- * in some importers (musl's default is 128 kB; a copy on the stack here once overflowed
- * it). */
-model_status model_state_check(model_instance *m, const char *fn, const model_data *d)
+void model_state_pack(const model_data *d, void *state)
+{
+    unsigned char *b = (unsigned char *)state;
+    size_t at = PACK_HEAD, size = model_state_size(d);
+    uint32_t size32 = (uint32_t)size;
+    int32_t i, zero = 0;
+    memcpy(b, d, PACK_HEAD);
+    memcpy(b + offsetof(model_data, size), &size32, 4);
+    memcpy(b + MEM_FIELD(past_first), &zero, 4);
+    memcpy(b + MEM_FIELD(phase_first), &zero, 4);
+    for (i = 0; i < d->mem.n_past; i++, at += PAST_BYTES)
+        memcpy(b + at, &d->mem.past[(d->mem.past_first + i) % DJL_SHAPER_RING], PAST_BYTES);
+    for (i = 0; i < d->mem.n_phase; i++, at += PHASE_BYTES)
+        memcpy(b + at, &d->mem.phase[(d->mem.phase_first + i) % DJL_SHAPER_RING], PHASE_BYTES);
+    model_state_seal(b, size);
+}
+
+/* The rings' entries of a packed state (counts checked) into d, after its head. */
+static void unpack_entries(const unsigned char *b, model_data *d)
+{
+    size_t past = (size_t)d->mem.n_past * PAST_BYTES;
+    memcpy(d->mem.past, b + PACK_HEAD, past);
+    memcpy(d->mem.phase, b + PACK_HEAD + past, (size_t)d->mem.n_phase * PHASE_BYTES);
+}
+
+void model_state_unpack(const void *state, model_data *d)
+{
+    memcpy(d, state, PACK_HEAD);
+    unpack_entries((const unsigned char *)state, d);
+}
+
+/* All the checks of a packed state of size bytes, which is unpacked into m->load (no
+ * copy of a state on the stack: a state is 30 to 293 kB, more than the whole stack of a
+ * thread in some importers; musl's default is 128 kB, and a copy on the stack here once
+ * overflowed it). */
+static model_status verify(model_instance *m, const char *fn, const unsigned char *b, size_t size)
 {
     const char *flaw;
-    char why[128];
-    if (!d) return model_null_arg(m, fn, "FMU state");
-    if (d->magic != MODEL_MAGIC || d->layout != MODEL_LAYOUT || d->size != sizeof(model_data))
+    char why[128], token[sizeof m->d.token];
+    int32_t n_past, n_phase, past_first, phase_first;
+    uint32_t stated;
+    uint64_t sum;
+    if (size < PACK_HEAD)
+        return model_refuse(m, "%s: FMU state of %lu bytes, too short for a state of this FMU "
+                            "(at least %lu: made by another version of the FMU?)", fn,
+                            (unsigned long)size, (unsigned long)PACK_HEAD);
+    if (read_u32(b, offsetof(model_data, magic)) != MODEL_MAGIC ||
+        read_u32(b, offsetof(model_data, layout)) != MODEL_LAYOUT)
         return model_refuse(m, "%s: not a state of this FMU (bad header)", fn);
-    if (memchr(d->token, '\0', sizeof d->token) == NULL ||
-        strcmp(d->token, DJL_INSTANTIATION_TOKEN) != 0)
+    stated = read_u32(b, offsetof(model_data, size));
+    if (stated != size)
+        return model_refuse(m, "%s: FMU state of %lu bytes, its header says %lu (truncated or "
+                            "extended?)", fn, (unsigned long)size, (unsigned long)stated);
+    memcpy(token, b + offsetof(model_data, token), sizeof token);
+    if (memchr(token, '\0', sizeof token) == NULL || strcmp(token, DJL_INSTANTIATION_TOKEN) != 0)
         return model_refuse(m, "%s: FMU state made by an FMU with another instantiation token "
-                            "(%.40s), this one is %s", fn, d->token, DJL_INSTANTIATION_TOKEN);
-    if (d->checksum != model_state_checksum(d))
+                            "(%.40s), this one is %s", fn, token, DJL_INSTANTIATION_TOKEN);
+    memcpy(&sum, b + offsetof(model_data, checksum), 8);
+    if (sum != model_state_checksum(b, size))
         return model_refuse(m, "%s: FMU state damaged (checksum mismatch): refused", fn);
-    if (d->state != MS_INSTANTIATED && d->state != MS_INIT && d->state != MS_STEP &&
-        d->state != MS_TERMINATED) {
+    memcpy(&n_past, b + MEM_FIELD(n_past), 4);
+    memcpy(&n_phase, b + MEM_FIELD(n_phase), 4);
+    memcpy(&past_first, b + MEM_FIELD(past_first), 4);
+    memcpy(&phase_first, b + MEM_FIELD(phase_first), 4);
+    if (n_past < 0 || n_past > DJL_SHAPER_RING || n_phase < 0 || n_phase > DJL_SHAPER_RING ||
+        past_first != 0 || phase_first != 0 ||
+        PACK_HEAD + (size_t)n_past * PAST_BYTES + (size_t)n_phase * PHASE_BYTES != size)
+        return model_refuse(m, "%s: FMU state refused: its size (%lu bytes) is not that of its "
+                            "shaper memory (%ld and %ld entries, from %ld and %ld)", fn,
+                            (unsigned long)size, (long)n_past, (long)n_phase, (long)past_first,
+                            (long)phase_first);
+    model_state_unpack(b, &m->load);
+    if (m->load.state != MS_INSTANTIATED && m->load.state != MS_INIT &&
+        m->load.state != MS_STEP && m->load.state != MS_TERMINATED) {
         snprintf(why, sizeof why, "state machine value %ld is not one a state can be saved in",
-                 (long)d->state);
+                 (long)m->load.state);
         flaw = why;
     } else {
-        flaw = model_state_flaw(d);
+        flaw = model_state_flaw(&m->load);
     }
     if (flaw) return model_refuse(m, "%s: FMU state refused: %s", fn, flaw);
     return ST_OK;
 }
 
-model_status model_state_check_size(model_instance *m, const char *fn, size_t size)
+model_status model_state_check(model_instance *m, const char *fn, const void *state)
 {
-    if (size != sizeof(model_data))
-        return model_refuse(m, "%s: FMU state of %lu bytes, expected %lu (made by another version "
-                            "of the FMU?)", fn, (unsigned long)size,
-                            (unsigned long)sizeof(model_data));
-    return ST_OK;
+    if (!state) return model_null_arg(m, fn, "FMU state");
+    if (read_u32(state, offsetof(model_data, magic)) != MODEL_MAGIC ||
+        read_u32(state, offsetof(model_data, layout)) != MODEL_LAYOUT ||
+        model_state_stored_size(state) > model_state_max_size())
+        return model_refuse(m, "%s: not a state of this FMU (bad header)", fn);
+    return verify(m, fn, (const unsigned char *)state, model_state_stored_size(state));
 }
 
-model_status model_state_load(model_instance *m, const char *fn, const void *bytes, size_t size,
-                              model_data *into)
+model_status model_state_load(model_instance *m, const char *fn, const void *bytes, size_t size)
 {
-    model_status st;
     if (!bytes) return model_null_arg(m, fn, "serializedState");
-    if ((st = model_state_check_size(m, fn, size)) != ST_OK) return st;
-    memcpy(into, bytes, sizeof(model_data));
-    return model_state_check(m, fn, into);
+    return verify(m, fn, (const unsigned char *)bytes, size);
+}
+
+void model_state_restore(model_instance *m)
+{
+    memcpy(&m->d, &m->load, PACK_HEAD);
+    memcpy(m->d.mem.past, m->load.mem.past, (size_t)m->load.mem.n_past * PAST_BYTES);
+    memcpy(m->d.mem.phase, m->load.mem.phase, (size_t)m->load.mem.n_phase * PHASE_BYTES);
 }

@@ -37,24 +37,26 @@ model_status model_enter_init(model_instance *m);
 model_status model_exit_init(model_instance *m); /* the model starts (model_start) */
 model_status model_terminate(model_instance *m);
 
-/* FMU state: bytes of model_data, sealed with a checksum (model_state_seal)
- * when saved.  model_state_check verifies, in place, a state object the FMU
- * allocated (an aligned model_data): header, token, checksum, the state
- * machine value and then the structure of everything a restore would bring
- * back (model_state_flaw: counts, indices, ordering, finiteness, outputs
- * consistent with the plan); a refusal is logged (naming fn) and leaves the
- * instance as it was.  model_state_load takes serialised bytes (any
- * alignment): their size (model_state_check_size, also on its own: before
- * allocating), then the same checks on their copy in into (an allocated
- * model_data, not to be used if refused).  No state is ever copied to the
- * stack. */
-size_t model_state_size(void);
-uint64_t model_state_checksum(const model_data *d);
-void model_state_seal(model_data *d);
-model_status model_state_check(model_instance *m, const char *fn, const model_data *d);
-model_status model_state_check_size(model_instance *m, const char *fn, size_t size);
-model_status model_state_load(model_instance *m, const char *fn, const void *bytes, size_t size,
-                              model_data *into);
+/* FMU state: model_data packed (model_state_pack: its bytes up to the entries of the
+ * shaper's rings, then their live entries; about 30 kB, at most model_state_max_size),
+ * sealed with a checksum.  model_state_check verifies a state object the FMU allocated,
+ * of the size its header states; model_state_load serialised bytes of a given size (any
+ * alignment): header, size, token, checksum, the rings' counts against the size, the
+ * state machine value and then the structure of everything a restore would bring back
+ * (model_state_flaw: counts, indices, ordering, finiteness, limits, outputs consistent
+ * with the plan), on the state unpacked into m->load.  A refusal is logged (naming fn)
+ * and leaves the instance as it was; after ST_OK, model_state_restore makes m->load the
+ * instance's data.  No state is ever copied to the stack. */
+size_t model_state_size(const model_data *d);  /* of d packed */
+size_t model_state_max_size(void);
+size_t model_state_stored_size(const void *state); /* its header's (a checked state) */
+uint64_t model_state_checksum(const void *state, size_t size);
+void model_state_seal(void *state, size_t size);
+void model_state_pack(const model_data *d, void *state); /* model_state_size(d) bytes, sealed */
+void model_state_unpack(const void *state, model_data *d); /* no check (tests forge with it) */
+model_status model_state_check(model_instance *m, const char *fn, const void *state);
+model_status model_state_load(model_instance *m, const char *fn, const void *bytes, size_t size);
+void model_state_restore(model_instance *m);
 
 #if defined(__GNUC__) && __GNUC__ >= 4
 #pragma GCC visibility pop

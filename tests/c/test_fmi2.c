@@ -383,13 +383,7 @@ static void corrupt(fmi2Byte *b, size_t size)
     }
 }
 
-static void reseal(fmi2Byte *b)
-{
-    model_data d;
-    memcpy(&d, b, sizeof d);
-    model_state_seal(&d);
-    memcpy(b, &d, sizeof d);
-}
+static void reseal(fmi2Byte *b, size_t size) { model_state_seal(b, size); }
 
 /* n corruptions of a mid-motion serialized state.  Plain: every one must be
  * refused (checksum) with a message, or replay identically.  Resealed (the
@@ -431,7 +425,7 @@ static void run_state_fuzz(long n, long n_sealed)
         sealed = it >= n;
         memcpy(work, buf, size);
         corrupt(work, size);
-        if (sealed) reseal(work);
+        if (sealed) reseal(work, size);
         last_message[0] = '\0';
         st = fmi2DeSerializeFMUstate(c, work, size, &s2);
         if (st != fmi2OK) {
@@ -471,28 +465,82 @@ static void run_state_fuzz(long n, long n_sealed)
     fmi2FreeInstance(c);
 }
 
+/* Packing (fmu_instance.c): a state holds the live entries of the shaper's rings in time
+ * order from index 0, wherever they wrapped in the instance; unpacking gives them back. */
+static void run_state_packing(void)
+{
+    static model_data d, back;
+    unsigned char *b = (unsigned char *)malloc(model_state_max_size());
+    size_t head = model_state_max_size() - DJL_SHAPER_RING * (sizeof(djl_past_piece) +
+                                                              sizeof(djl_phase_point));
+    int32_t i;
+    CHECK(b != NULL, "malloc");
+    memset(&d, 0, sizeof d);
+    d.magic = MODEL_MAGIC;
+    d.n = 12345;
+    d.mem.n_past = 5;
+    d.mem.past_first = DJL_SHAPER_RING - 2; /* wraps */
+    d.mem.n_phase = 3;
+    d.mem.phase_first = 7;
+    for (i = 0; i < DJL_SHAPER_RING; i++) {
+        d.mem.past[i].k = 1000 + i;
+        d.mem.past[i].x = -(double)i;
+        d.mem.phase[i].k = 5000 + i;
+        d.mem.phase[i].rate = 0.5 * i;
+    }
+    CHECK(model_state_size(&d) == head + 5 * sizeof(djl_past_piece) + 3 * sizeof(djl_phase_point),
+          "packed size %lu", (unsigned long)model_state_size(&d));
+    memset(b, 0xAB, model_state_max_size());
+    model_state_pack(&d, b);
+    CHECK(model_state_stored_size(b) == model_state_size(&d), "header size");
+    CHECK(b[model_state_size(&d)] == 0xAB, "packing wrote past its size");
+    memset(&back, 0x55, sizeof back);
+    model_state_unpack(b, &back);
+    CHECK(back.n == 12345 && back.mem.n_past == 5 && back.mem.n_phase == 3 &&
+          back.mem.past_first == 0 && back.mem.phase_first == 0, "unpacked counts");
+    for (i = 0; i < 5; i++)
+        CHECK(back.mem.past[i].k == 1000 + (DJL_SHAPER_RING - 2 + i) % DJL_SHAPER_RING &&
+              back.mem.past[i].x == -(double)((DJL_SHAPER_RING - 2 + i) % DJL_SHAPER_RING),
+              "past entry %d", (int)i);
+    for (i = 0; i < 3; i++)
+        CHECK(back.mem.phase[i].k == 5000 + 7 + i && back.mem.phase[i].rate == 0.5 * (7 + i),
+              "phase entry %d", (int)i);
+    /* the seal covers the entries: one changed, the checksum no longer holds */
+    {
+        uint64_t sum;
+        memcpy(&sum, b + offsetof(model_data, checksum), 8);
+        CHECK(sum == model_state_checksum(b, model_state_size(&d)), "sealed");
+        b[head + 8] ^= 1;
+        CHECK(sum != model_state_checksum(b, model_state_size(&d)), "entries sealed");
+    }
+    d.mem.n_past = d.mem.n_phase = 0;
+    CHECK(model_state_size(&d) == head, "empty rings: the head alone");
+    free(b);
+}
+
 /* Targeted structural damage with a valid checksum: each is refused by name. */
 static void run_forged_states(void)
 {
     fmi2Component c = ready("forged");
     fmi2FMUstate s = NULL, s2 = NULL;
     size_t size = 0;
-    fmi2Byte *buf;
-    model_data d;
+    fmi2Byte *buf, *forged;
+    static model_data d; /* unpacked, changed, packed and sealed again */
     int k;
     double t = 0.0;
     for (k = 0; k < 50; k++, t += 1e-3) fmi2DoStep(c, t, 1e-3, fmi2True);
     fmi2GetFMUstate(c, &s);
     fmi2SerializedFMUstateSize(c, s, &size);
     buf = (fmi2Byte *)malloc(size);
+    forged = (fmi2Byte *)malloc(model_state_max_size());
     fmi2SerializeFMUstate(c, s, buf, size);
 #define FORGE(stmt, fragment)                                                                     \
     do {                                                                                         \
-        memcpy(&d, buf, sizeof d);                                                               \
+        model_state_unpack(buf, &d);                                                             \
         stmt;                                                                                    \
-        model_state_seal(&d);                                                                    \
-        expect_error(fmi2DeSerializeFMUstate(c, (const fmi2Byte *)&d, sizeof d, &s2), fragment); \
-        expect_error(fmi2SetFMUstate(c, &d), fragment);                                          \
+        model_state_pack(&d, forged);                                                            \
+        expect_error(fmi2DeSerializeFMUstate(c, forged, model_state_size(&d), &s2), fragment);   \
+        expect_error(fmi2SetFMUstate(c, forged), fragment);                                      \
     } while (0)
     FORGE(d.state = 64, "state machine value 64");
     FORGE(d.state = MS_ERROR, "state machine value 32");
@@ -529,9 +577,38 @@ static void run_forged_states(void)
     FORGE(d.plan.v_reached = 1e300, "outside its limits");
     FORGE(d.f_seen = -1.0, "f_mode last seen");
     /* unchecked: the checksum alone */
-    memcpy(&d, buf, sizeof d);
+    model_state_unpack(buf, &d);
     d.plan.seg[0].frac += 1.0;
-    expect_error(fmi2DeSerializeFMUstate(c, (const fmi2Byte *)&d, sizeof d, &s2), "checksum");
+    model_state_pack(&d, forged);
+    memcpy(forged + offsetof(model_data, checksum), buf + offsetof(model_data, checksum), 8);
+    expect_error(fmi2DeSerializeFMUstate(c, forged, size, &s2), "checksum");
+    expect_error(fmi2SetFMUstate(c, forged), "checksum");
+    /* the packing: a size that is not the rings' (a count changed, resealed), a truncated
+     * or extended state (the header's size), another layout, a ring not packed from 0 */
+    FORGE(d.mem.n_past = 1, "a memory of the shaper without a shaper"); /* packed: checked */
+    FORGE(d.mem.n_phase = DJL_SHAPER_RING + 1, "not that of its shaper memory");
+    memcpy(forged, buf, size);
+    expect_error(fmi2DeSerializeFMUstate(c, forged, size + 8, &s2), "its header says");
+    expect_error(fmi2DeSerializeFMUstate(c, forged, 100, &s2), "too short");
+    {
+        int32_t first = 3, count = -1;
+        memcpy(forged + offsetof(model_data, mem) + offsetof(djl_shaper_memory, n_past),
+               &count, 4);
+        model_state_seal(forged, size);
+        expect_error(fmi2DeSerializeFMUstate(c, forged, size, &s2), "(-1 and 0 entries");
+        expect_error(fmi2SetFMUstate(c, forged), "(-1 and 0 entries");
+        memcpy(forged, buf, size);
+        uint32_t layout = MODEL_LAYOUT - 1;
+        memcpy(forged + offsetof(model_data, mem) + offsetof(djl_shaper_memory, past_first),
+               &first, 4);
+        model_state_seal(forged, size);
+        expect_error(fmi2DeSerializeFMUstate(c, forged, size, &s2), "from 3 and 0");
+        memcpy(forged, buf, size);
+        memcpy(forged + offsetof(model_data, layout), &layout, 4);
+        model_state_seal(forged, size);
+        expect_error(fmi2DeSerializeFMUstate(c, forged, size, &s2), "bad header");
+        expect_error(fmi2SetFMUstate(c, forged), "bad header");
+    }
 #undef FORGE
     /* refusals left the instance as it was */
     still_usable(c, 0.0);
@@ -543,6 +620,7 @@ static void run_forged_states(void)
     CHECK(fmi2Reset(c) == fmi2OK, "reset from Error");
     fmi2FreeFMUstate(c, &s);
     free(buf);
+    free(forged);
     fmi2FreeInstance(c);
 }
 
@@ -714,7 +792,12 @@ static void run_entry_points(void)
         CHECK(fmi2SerializedFMUstateSize(c, s, &size) == fmi2OK, "size");
         buf = (fmi2Byte *)malloc(size);
         CHECK(fmi2SerializeFMUstate(c, s, buf, size) == fmi2OK, "serialize");
-        ((model_data *)s)->n += 1; /* the checksum no longer holds */
+        {
+            int64_t n; /* the checksum no longer holds */
+            memcpy(&n, (char *)s + offsetof(model_data, n), 8);
+            n += 1;
+            memcpy((char *)s + offsetof(model_data, n), &n, 8);
+        }
         s2 = s;
         expect_error(fmi2GetFMUstate(c, &s2), "state to overwrite");
         CHECK(fmi2Reset(c) == fmi2OK && fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0) == fmi2OK &&
@@ -903,6 +986,7 @@ int main(int argc, char **argv)
     run_bad_inputs();
     run_two_instances();
     run_null_pointers();
+    run_state_packing();
     run_forged_states();
     run_commands(2);
     run_commands(3);

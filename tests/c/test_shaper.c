@@ -37,6 +37,7 @@
 
 #include "djl_vars.h"
 #include "fmi2Functions.h"
+#include "fmu_instance.h" /* model_state_max_size: which restored states hold shaper memory */
 
 static long case_no;
 #define CHECK(cond, ...)                                                                         \
@@ -68,7 +69,7 @@ static unsigned char rdone[MAXS];
 
 typedef struct {
     long cases, skipped, steps, commands, stops, fchanges, custom, negative, off_grid, by_fmode,
-        fractional, restores;
+        fractional, restores, restores_mem;
 } tally;
 
 typedef struct {
@@ -627,6 +628,10 @@ static void run_case(tally *t)
                 fmi2Byte *buf;
                 fmi2FMUstate back = NULL;
                 CHECK(fmi2SerializedFMUstateSize(S, saved, &size) == fmi2OK, "size");
+                /* a packed state holds the live entries of the shaper's rings */
+                t->restores_mem += size > model_state_max_size() - DJL_SHAPER_RING *
+                                                      (sizeof(djl_past_piece) +
+                                                       sizeof(djl_phase_point));
                 buf = (fmi2Byte *)malloc(size);
                 CHECK(fmi2SerializeFMUstate(S, saved, buf, size) == fmi2OK, "serialize");
                 CHECK(fmi2DeSerializeFMUstate(S, buf, size, &back) == fmi2OK,
@@ -683,9 +688,10 @@ int main(int argc, char **argv)
     printf("test_shaper: %ld motions (%ld parameter sets skipped), %ld steps of S; %ld custom "
            "shapers (%ld with a negative amplitude), %ld with delays off the grid, %ld timed by "
            "f_mode (%ld f_mode changes), %ld with fractional steps; %ld commands (%ld stops); "
-           "%ld FMU states restored and replayed\n",
+           "%ld FMU states restored and replayed (%ld with entries in the shaper's memory)\n",
            t.cases, t.skipped, t.steps, t.custom, t.negative, t.off_grid, t.by_fmode, t.fchanges,
-           t.fractional, t.commands, t.stops, t.restores);
+           t.fractional, t.commands, t.stops, t.restores, t.restores_mem);
+    CHECK(t.restores < 100 || t.restores_mem > 0, "no state restored held shaper memory");
     printf("test_shaper: %d failures\n", failures);
     return failures != 0;
 }

@@ -22,7 +22,7 @@
 #include "djl_vars.h"
 #include "fmi2Functions.h"
 #include "fmi3Functions.h"
-#include "fmu_instance.h" /* model_data: the size of a state */
+#include "fmu_instance.h" /* model_state_max_size: the largest state */
 
 static int failures = 0;
 #define EXPECT(cond, what)                                                                       \
@@ -80,7 +80,8 @@ static void session2(void)
     EXPECT(fmi2DoStep(c, t, 0.05, fmi2True) == fmi2OK, "step on");
     EXPECT(fmi2GetFMUstate(c, &s) == fmi2OK, "fmi2GetFMUstate over a state");
     EXPECT(fmi2SetFMUstate(c, s) == fmi2OK, "fmi2SetFMUstate");
-    EXPECT(fmi2SerializedFMUstateSize(c, s, &size) == fmi2OK && size == sizeof(model_data),
+    EXPECT(fmi2SerializedFMUstateSize(c, s, &size) == fmi2OK && size > 1000 &&
+           size <= model_state_max_size(),
            "size");
     buf = (fmi2Byte *)malloc(size + 1);
     EXPECT(buf != NULL, "malloc");
@@ -122,7 +123,8 @@ static void session3(void)
     EXPECT(fmi3GetFMUState(c, &s) == fmi3OK && s, "fmi3GetFMUState");
     EXPECT(fmi3GetFMUState(c, &s) == fmi3OK, "fmi3GetFMUState over a state");
     EXPECT(fmi3SetFMUState(c, s) == fmi3OK, "fmi3SetFMUState");
-    EXPECT(fmi3SerializedFMUStateSize(c, s, &size) == fmi3OK && size == sizeof(model_data),
+    EXPECT(fmi3SerializedFMUStateSize(c, s, &size) == fmi3OK && size > 1000 &&
+           size <= model_state_max_size(),
            "size");
     buf = (fmi3Byte *)malloc(size + 3);
     EXPECT(buf != NULL, "malloc");

@@ -222,16 +222,20 @@ static int set_state(fmu *f, int slot)
     return (int)fmi2SetFMUstate(f->c2, (fmi2FMUstate)f->state[slot]);
 }
 
-static int serialize(fmu *f, int slot, unsigned char *buf, size_t n)
+/* The state of a slot into buf (n bytes); its size in *size. */
+static int serialize(fmu *f, int slot, unsigned char *buf, size_t n, size_t *size)
 {
-    size_t size = 0;
     int st;
-    if (f->v3) st = (int)fmi3SerializedFMUStateSize(f->c3, (fmi3FMUState)f->state[slot], &size);
-    else st = (int)fmi2SerializedFMUstateSize(f->c2, (fmi2FMUstate)f->state[slot], &size);
+    *size = 0;
+    if (f->v3) st = (int)fmi3SerializedFMUStateSize(f->c3, (fmi3FMUState)f->state[slot], size);
+    else st = (int)fmi2SerializedFMUstateSize(f->c2, (fmi2FMUstate)f->state[slot], size);
     if (st != 0) return st;
-    FUZZ_CHECK(size == sizeof(model_data), "serialized size %lu", (unsigned long)size);
-    if (f->v3) return (int)fmi3SerializeFMUState(f->c3, (fmi3FMUState)f->state[slot], buf, n);
-    return (int)fmi2SerializeFMUstate(f->c2, (fmi2FMUstate)f->state[slot], (fmi2Byte *)buf, n);
+    FUZZ_CHECK(*size > 0 && *size <= model_state_max_size(), "serialized size %lu",
+               (unsigned long)*size);
+    if (f->v3) st = (int)fmi3SerializeFMUState(f->c3, (fmi3FMUState)f->state[slot], buf, n);
+    else st = (int)fmi2SerializeFMUstate(f->c2, (fmi2FMUstate)f->state[slot], (fmi2Byte *)buf, n);
+    if (st == 0) FUZZ_CHECK(model_state_stored_size(buf) == *size, "a state's header size");
+    return st;
 }
 
 static int deserialize(fmu *f, int slot, const unsigned char *buf, size_t n)
@@ -267,7 +271,7 @@ typedef struct {
     int stepping;   /* Step Mode, the last step OK */
 } follow;
 
-static unsigned char state_buf[sizeof(model_data)];
+static unsigned char state_buf[sizeof(model_data)]; /* more than the largest state */
 
 static void read_outputs(fmu *f, outputs *o)
 {
@@ -365,15 +369,16 @@ static double step_size(fuzz_reader *r, double Te)
 static void own_state(fmu *f, int slot, int stepping)
 {
     outputs a, b;
+    size_t size;
     int st;
     read_outputs(f, &a);
     st = get_state(f, slot);
     if (st != 0) return;
     st = set_state(f, slot);
     FUZZ_CHECK(st == 0, "the FMU refused a state it saved itself (set): %s", last_msg);
-    st = serialize(f, slot, state_buf, sizeof state_buf);
+    st = serialize(f, slot, state_buf, sizeof state_buf, &size);
     FUZZ_CHECK(st == 0, "the FMU refused to serialise a state it saved itself: %s", last_msg);
-    st = deserialize(f, 1 - slot, state_buf, sizeof state_buf);
+    st = deserialize(f, 1 - slot, state_buf, size);
     FUZZ_CHECK(st == 0, "the FMU refused its own serialised state: %s", last_msg);
     st = set_state(f, 1 - slot);
     FUZZ_CHECK(st == 0, "the FMU refused its own deserialised state (set): %s", last_msg);
@@ -504,9 +509,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         }
         case 11: { /* a forged state: one 8-byte word of a saved one changed, resealed */
             int slot = rd_u8(&r) & 1;
-            size_t at = (rd_u32(&r) % (sizeof(model_data) / 8)) * 8;
-            model_data *d = (model_data *)state_buf;
-            if (!f.state[slot] || serialize(&f, slot, state_buf, sizeof state_buf) != 0) break;
+            uint32_t word = rd_u32(&r);
+            size_t at, n = 0;
+            if (!f.state[slot] || serialize(&f, slot, state_buf, sizeof state_buf, &n) != 0)
+                break;
+            at = (word % (n / 8)) * 8;
             if (rd_u8(&r) & 1) {
                 double x = rd_double(&r);
                 memcpy(state_buf + at, &x, 8);
@@ -514,8 +521,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 uint32_t x = rd_u32(&r);
                 memcpy(state_buf + at + (rd_u8(&r) & 4), &x, 4);
             }
-            if (rd_u8(&r) % 8) model_state_seal(d);
-            if (deserialize(&f, 1 - slot, state_buf, sizeof state_buf) == 0 &&
+            if (rd_u8(&r) % 8) model_state_seal(state_buf, n);
+            if (deserialize(&f, 1 - slot, state_buf, n) == 0 &&
                 set_state(&f, 1 - slot) == 0) {
                 w.tracked = 0;
                 w.stepping = 0;

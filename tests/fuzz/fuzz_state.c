@@ -4,7 +4,8 @@
  * The first byte picks the input's meaning:
  *  - raw: the rest of the input is the serialised state, as is (any size);
  *  - forged: a state the FMU saved (one of six base scenarios: the default move at
- *    0.05 s, three segments, an input shaper, jerk_source 3 after a replan, AL after a
+ *    0.05 s, three segments, an input shaper timed by f_mode after a replan (both rings of
+ *    its memory in use), jerk_source 3 after a replan, AL after a
  *    stop, a state saved before initialisation), patched by the input (bytes, 4- and
  *    8-byte words, doubles from the table of fuzz_common.h; half of them within the plan
  *    and the values around it), then mostly sealed again with a valid checksum, as a
@@ -36,7 +37,8 @@ static void logger(fmi2ComponentEnvironment e, fmi2String n, fmi2Status s, fmi2S
 }
 
 static const fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
-static model_data base[N_BASE];
+static model_data base[N_BASE]; /* serialised (packed) states, base_size[i] bytes */
+static size_t base_size[N_BASE];
 static model_data work;
 static fmi2Component inst;
 
@@ -87,10 +89,11 @@ static void steps(fmi2Component c, int n, double h)
         FUZZ_CHECK(fmi2DoStep(c, get_real(c, VR_TIME), h, fmi2True) == fmi2OK, "base step");
 }
 
-static void save(fmi2Component c, model_data *d)
+static void save(fmi2Component c, model_data *d, size_t *size)
 {
     fmi2FMUstate s = NULL;
     FUZZ_CHECK(fmi2GetFMUstate(c, &s) == fmi2OK, "base state");
+    FUZZ_CHECK(fmi2SerializedFMUstateSize(c, s, size) == fmi2OK, "size");
     FUZZ_CHECK(fmi2SerializeFMUstate(c, s, (fmi2Byte *)d, sizeof *d) == fmi2OK, "serialise");
     fmi2FreeFMUstate(c, &s);
 }
@@ -113,6 +116,7 @@ static void make_bases(void)
         } else if (i == 2) {
             set_int(c, VR_SHAPER, SHAPER_ZVD);
             set_real(c, VR_F_SHAPER, 7.0);
+            set_int(c, VR_SHAPER_SOURCE, SHAPER_SOURCE_F_MODE); /* both rings in use */
         } else if (i == 3) {
             set_int(c, VR_JERK_SOURCE, JERK_SOURCE_F_MODE_AHEAD);
             set_real(c, VR_F_MODE, 9.0);
@@ -120,14 +124,19 @@ static void make_bases(void)
             set_int(c, VR_PROFILE, PROFILE_AL);
         }
         if (i == 5) { /* saved before initialisation */
-            save(c, &base[i]);
+            save(c, &base[i], &base_size[i]);
             fmi2FreeInstance(c);
             continue;
         }
         FUZZ_CHECK(fmi2EnterInitializationMode(c) == fmi2OK, "enter");
         FUZZ_CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit");
         steps(c, i == 0 ? 50 : 120, 1e-3);
-        if (i == 3) {
+        if (i == 2) { /* a replan: the shaper keeps the past of the plan it replaces */
+            set_real(c, VR_F_MODE, 12.0);
+            set_real(c, VR_TARGET, 0.2);
+            set_bool(c, VR_EXECUTE, 1);
+            steps(c, 30, 1e-3);
+        } else if (i == 3) {
             set_real(c, VR_F_MODE, 14.0);
             set_real(c, VR_TARGET, -0.1);
             set_bool(c, VR_EXECUTE, 1);
@@ -136,19 +145,20 @@ static void make_bases(void)
             set_bool(c, VR_STOP, 1);
             steps(c, 3, 1e-3);
         }
-        save(c, &base[i]);
+        save(c, &base[i], &base_size[i]);
         fmi2FreeInstance(c);
     }
+    FUZZ_CHECK(base_size[2] > base_size[0], "the shaper's base state holds no memory entries");
     inst = fmi2Instantiate("fuzz", fmi2CoSimulation, DJL_INSTANTIATION_TOKEN, "file:///tmp", &cb,
                            fmi2False, fmi2False);
     FUZZ_CHECK(inst != NULL, "instantiate");
 }
 
-/* Offsets: anywhere, or (half the time) within the model's values before the shaper's
- * memory, which is most of the state. */
-static size_t pick_offset(fuzz_reader *r, size_t width)
+/* Offsets: anywhere in a packed state of size bytes, or (half the time) within the
+ * model's values before the shaper's memory. */
+static size_t pick_offset(fuzz_reader *r, size_t width, size_t size)
 {
-    size_t lo = 0, hi = sizeof(model_data);
+    size_t lo = 0, hi = size;
     if (rd_u8(r) & 1) {
         lo = offsetof(model_data, p);
         hi = offsetof(model_data, mem);
@@ -212,32 +222,32 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                                            size >= 2 ? size - 2 : 0, &s) == fmi2OK;
     } else {
         int n = 1 + rd_u8(&r) % 8, k;
-        memcpy(&work, &base[which], sizeof work);
+        size_t n_work = base_size[which];
+        memcpy(&work, &base[which], n_work);
         for (k = 0; k < n; k++) {
             uint8_t how = rd_u8(&r);
             size_t at;
             if (how % 4 == 0) {
-                at = pick_offset(&r, 8);
+                at = pick_offset(&r, 8, n_work);
                 x = rd_double(&r);
                 memcpy((char *)&work + at, &x, 8);
             } else if (how % 4 == 1) {
                 uint32_t u = rd_u32(&r);
-                at = pick_offset(&r, 4);
+                at = pick_offset(&r, 4, n_work);
                 memcpy((char *)&work + at, &u, 4);
             } else if (how % 4 == 2) {
                 uint64_t u = 0;
-                at = pick_offset(&r, 8);
+                at = pick_offset(&r, 8, n_work);
                 memcpy(&u, (char *)&work + at, 8);
                 u ^= (uint64_t)1 << (rd_u8(&r) % 64);
                 memcpy((char *)&work + at, &u, 8);
             } else {
-                at = pick_offset(&r, 1);
+                at = pick_offset(&r, 1, n_work);
                 ((unsigned char *)&work)[at] = rd_u8(&r);
             }
         }
-        if (mode % 8 != 7) model_state_seal(&work);
-        accepted = fmi2DeSerializeFMUstate(inst, (const fmi2Byte *)&work, sizeof work, &s) ==
-                   fmi2OK;
+        if (mode % 8 != 7) model_state_seal(&work, n_work);
+        accepted = fmi2DeSerializeFMUstate(inst, (const fmi2Byte *)&work, n_work, &s) == fmi2OK;
     }
     if (accepted) {
         FUZZ_CHECK(fmi2SetFMUstate(inst, s) == fmi2OK, "set an accepted state");
@@ -245,7 +255,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     } else {
         /* refused: the instance is as it was; a good state is still accepted */
         FUZZ_CHECK(fmi2DeSerializeFMUstate(inst, (const fmi2Byte *)&base[which],
-                                           sizeof base[which], &s) == fmi2OK, "base refused");
+                                           base_size[which], &s) == fmi2OK, "base refused");
     }
     fmi2FreeFMUstate(inst, &s);
     FUZZ_CHECK(fmi2Reset(inst) == fmi2OK, "reset");
