@@ -108,9 +108,26 @@ static djl_status infeasible(djl_error *err, const djl_params *p, int i, const s
          * samples a plan may hold, the limits are too low for the residual: infeasible
          * (issue 21: a_max = 1e-30 m/s^2 and a residual of 6e-4 m into an empty last
          * segment, a_max = 1e-300 m/s^2 with Te = 4e154 s, were internal errors) */
-        double na, nd;
+        double na, nd, passed = djl_ldexp(c->D, -kl) - djl_fabs(D);
+        /* the stages' ramps and their rounding to whole samples lengthen a profile beyond
+         * least_samples: the solver, which stops at the horizon, finds none when that bound
+         * is within them (and the bound's rounding) of it (issue 21, third session: 100 m
+         * from rest with a_max = 2e-22 m/s^2 needs exactly 10^15 samples of 1 ms, and was
+         * an internal error, not refused) */
+        double ramps = (double)c->N1 + (double)c->N2 + (double)c->N3 + (double)c->N4 + 8.0;
         least_samples(c->D, c->vs, c->ve, c->am, c->dm, c->Te, &na, &nd);
-        if (na + nd > too_many_samples)
+        if (na + nd + ramps > (double)DJL_MAX_MOTION_SAMPLES * (1.0 - 1e-9) &&
+            !(passed > 0.5 * djl_ldexp(c->D, -kl)))
+            return set_error(err, DJL_E_INFEASIBLE, na >= nd ? "a_max" : "d_max",
+                             na >= nd ? p->a_max : p->d_max,
+                             "%s = %g m from %g m/s to %g m/s (a_max = %g m/s2, d_max = %g "
+                             "m/s2): the move needs at least %g samples of Te = %g s, %g of "
+                             "them %s; with its jerk ramps (%g samples) and its stages rounded "
+                             "to whole samples it does not fit in the %g a plan may hold",
+                             dname, D, vs, ve, p->a_max, p->d_max, na + nd, p->Te,
+                             na >= nd ? na : nd, na >= nd ? "accelerating" : "decelerating",
+                             ramps - 8.0, (double)DJL_MAX_MOTION_SAMPLES);
+        if (na + nd + ramps > (double)DJL_MAX_MOTION_SAMPLES * (1.0 - 1e-9))
             return set_error(err, DJL_E_INFEASIBLE, na >= nd ? "a_max" : "d_max",
                              na >= nd ? p->a_max : p->d_max,
                              "%s = %g m from %g m/s to %g m/s: the rounding of the segments "

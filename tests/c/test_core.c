@@ -491,6 +491,56 @@ static int beyond_documented_limits(const djl_params *p)
 
 /* Found by fuzz_plan (issue 21; tests/fuzz/corpus/plan/crash_issue21_*), every run: each
  * was an internal error. */
+/* Issue 21, third session (fuzz_plan): rest-to-rest moves whose least duration is the
+ * horizon, 10^15 samples (100 m with a_max = 2e-22 m/s^2, d_max = 10 m/s^2, Te = 1 ms, was
+ * an internal error).  Around the distance D* at which accelerating at a_max and
+ * decelerating at d_max take exactly 10^15 samples, T = sqrt(2 D (1/a + 1/d)), every move
+ * is planned (and checked) or refused as infeasible naming a_max or d_max (or Te: the
+ * ramps that end the motion past the horizon), never an internal error; 4e-9 below D* it
+ * is planned, 4e-9 above it refused. */
+static void horizon_sweep(void)
+{
+    static const double lim[3][2] = {{2e-22, 10.0}, {10.0, 2e-22}, {1e-20, 1e-20}};
+    djl_params p;
+    djl_error e;
+    djl_status st;
+    long planned = 0, refused = 0;
+    int prof, ss, sgn, l, k;
+    for (prof = 1; prof <= 3; prof++)
+        for (ss = 1; ss <= 2; ss++)
+            for (sgn = -1; sgn <= 1; sgn += 2)
+                for (l = 0; l < 3; l++)
+                    for (k = -400; k <= 400; k += (k > -20 && k < 20) ? 1 : 10) {
+                        double a = lim[l][0], d = lim[l][1], T = 1e15 * 1e-3;
+                        double Dstar = T * T / (2.0 * (1.0 / a + 1.0 / d));
+                        djl_params_default(&p);
+                        p.profile = prof;
+                        p.short_stage = ss;
+                        p.v_max = 100.0;
+                        p.a_max = a;
+                        p.d_max = d;
+                        p.distance = sgn * Dstar * (1.0 + k * 1e-11);
+                        st = djl_plan_motion(&p, &plan, &e);
+                        if (st == DJL_OK) {
+                            planned++;
+                            check_plan(-1, &p);
+                        } else if (st == DJL_E_INFEASIBLE && (strcmp(e.param, "a_max") == 0 ||
+                                                              strcmp(e.param, "d_max") == 0 ||
+                                                              strcmp(e.param, "Te") == 0)) {
+                            refused++;
+                        } else {
+                            FAIL("horizon sweep (profile %d, short_stage %d, distance %.17g, "
+                                 "a_max %g, d_max %g): %s %s: %s", prof, ss, p.distance, a, d,
+                                 djl_status_name(st), e.param, e.message);
+                        }
+                        if ((k == -400 && st != DJL_OK) || (k == 400 && st == DJL_OK))
+                            FAIL("horizon sweep: distance %.17g (D* (1 %+g)), profile %d: %s",
+                                 p.distance, k * 1e-11, prof, st == DJL_OK ? "planned" : e.message);
+                    }
+    printf("test_core: horizon sweep: %ld planned, %ld refused as infeasible\n", planned,
+           refused);
+}
+
 static void issue21_cases(void)
 {
     djl_params p;
@@ -547,6 +597,7 @@ static void issue21_cases(void)
     if (st != DJL_E_INFEASIBLE || strcmp(e.param, "a_max") != 0 || !strstr(e.message, "2e+18"))
         FAIL("issue 21, 1e15 m at a_max = 1e-300: %s %s: %s", djl_status_name(st), e.param,
              e.message);
+    horizon_sweep();
 }
 
 /* The cases of issue #10 item 6, every run. */

@@ -6,7 +6,7 @@
 # gcc).  Run one at a time, e.g. (docs/generator.md, "Fuzzing"):
 #
 #   tests/fuzz/build.sh && nice -n 15 /tmp/djl-fuzz/fuzz_fmi -max_total_time=1800 \
-#       -dict=tests/fuzz/fmi.dict /tmp/djl-fuzz/corpus_fmi tests/fuzz/corpus/fmi
+#       /tmp/djl-fuzz/corpus_fmi tests/fuzz/corpus/fmi
 set -eu
 cd "$(dirname "$0")/../.."
 OUT=${OUT:-/tmp/djl-fuzz}

@@ -160,6 +160,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         for (i = 0; i < 4; i++) g.N[i] = 1 + rd_u8(&r) % 64;
     g.keep_speed = rd_u8(&r) & 1;
     g.no_stop_first = rd_u8(&r) % 4 == 0;
+    if (getenv("FUZZ_VERBOSE"))
+        fprintf(stderr, "replan at u = %.17g samples (k_end %lld): %s %.17g, N %d %d %d %d, "
+                "keep_speed %d, no_stop_first %d\n", u, (long long)plan.k_end,
+                g.kind == DJL_GOAL_STOP ? "stop" : "target", g.target, (int)g.N[0], (int)g.N[1],
+                (int)g.N[2], (int)g.N[3], (int)g.keep_speed, (int)g.no_stop_first);
     cur = 0;
     djl_eval(&plan, u, &cur, &s);
     st = djl_replan(&plan, u, &g, &out, &scratch, &info, &e);
