@@ -84,9 +84,11 @@ run() { # name, arguments: the suite's checks pass under coverage too
 
 if [ -n "$COV_PYTEST" ]; then
     log "running pytest $COV_PYTEST (FMUs built with --coverage)"
+    # one process (-n 0): workers building the FMU into the same gcov folder would mix
+    # the notes of one build with the counts of another ("stamp mismatch")
     # shellcheck disable=SC2086
     DJL_TEST_FMU_CFLAGS="-O0 --coverage -dumpdir $COV/fmu{fmi}/" \
-        $PY -m pytest -q -p no:cacheprovider $COV_PYTEST > "$COV/pytest.out" 2>&1 ||
+        $PY -m pytest -q -n 0 -p no:cacheprovider $COV_PYTEST > "$COV/pytest.out" 2>&1 ||
         { tail -30 "$COV/pytest.out" >&2; exit 1; }
 fi
 

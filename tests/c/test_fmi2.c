@@ -624,6 +624,72 @@ static void run_forged_states(void)
     fmi2FreeInstance(c);
 }
 
+/* The shaper's memory in a state, forged entry by entry (the packing puts each ring's live
+ * entries in the bytes, so a forger reaches them): each flaw refused by name.  A ZVD shaper
+ * timed by f_mode, f_mode changed and a target commanded: both rings hold entries. */
+static void run_forged_memory(void)
+{
+    fmi2Component c = make("forged memory");
+    fmi2FMUstate s2 = NULL;
+    fmi2ValueReference vr_shaper = VR_SHAPER, vr_source = VR_SHAPER_SOURCE;
+    fmi2ValueReference vr_x = VR_EXECUTE;
+    fmi2Integer zvd = SHAPER_ZVD, by_fmode = SHAPER_SOURCE_F_MODE;
+    fmi2Boolean on = fmi2True;
+    fmi2Byte *buf, *forged;
+    static model_data d;
+    size_t size = 0;
+    fmi2FMUstate s = NULL;
+    double t = 0.0;
+    int k;
+    CHECK(fmi2SetInteger(c, &vr_shaper, 1, &zvd) == fmi2OK, "shaper");
+    CHECK(fmi2SetInteger(c, &vr_source, 1, &by_fmode) == fmi2OK, "shaper_source");
+    set_real(c, VR_F_SHAPER, 7.0);
+    CHECK(fmi2EnterInitializationMode(c) == fmi2OK, "enter");
+    CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit: %s", last_message);
+    for (k = 0; k < 120; k++, t += 1e-3) CHECK(fmi2DoStep(c, t, 1e-3, fmi2True) == fmi2OK, "step");
+    set_real(c, VR_F_MODE, 12.0);
+    set_real(c, VR_TARGET, 0.2);
+    CHECK(fmi2SetBoolean(c, &vr_x, 1, &on) == fmi2OK, "execute");
+    for (k = 0; k < 30; k++, t += 1e-3)
+        CHECK(fmi2DoStep(c, t, 1e-3, fmi2True) == fmi2OK, "step: %s", last_message);
+    CHECK(fmi2GetFMUstate(c, &s) == fmi2OK, "get");
+    CHECK(fmi2SerializedFMUstateSize(c, s, &size) == fmi2OK, "size");
+    buf = (fmi2Byte *)malloc(size);
+    forged = (fmi2Byte *)malloc(model_state_max_size());
+    CHECK(fmi2SerializeFMUstate(c, s, buf, size) == fmi2OK, "serialize");
+    model_state_unpack(buf, &d);
+    CHECK(d.mem.n_past >= 2 && d.mem.n_phase >= 2, "rings: %d past pieces, %d phase points",
+          (int)d.mem.n_past, (int)d.mem.n_phase);
+    /* the state as it is: accepted */
+    CHECK(fmi2DeSerializeFMUstate(c, buf, size, &s2) == fmi2OK, "deserialize: %s", last_message);
+#define FORGE_MEM(stmt, fragment)                                                                 \
+    do {                                                                                         \
+        model_state_unpack(buf, &d);                                                             \
+        stmt;                                                                                    \
+        model_state_pack(&d, forged);                                                            \
+        expect_error(fmi2DeSerializeFMUstate(c, forged, model_state_size(&d), &s2), fragment);   \
+        expect_error(fmi2SetFMUstate(c, forged), fragment);                                      \
+    } while (0)
+    FORGE_MEM(d.mem.n_phase = 0, "no phase of f_mode with a shaper timed by it");
+    FORGE_MEM(d.mem.past[1].k = d.mem.past[0].k, "past pieces are not in order");
+    FORGE_MEM(d.mem.past[0].k = -DJL_MAX_PLAN_END - 1, "past pieces are not in order");
+    FORGE_MEM(d.mem.past[0].x = NAN, "past piece of the shaper is not finite");
+    FORGE_MEM(d.mem.past[1].j = INFINITY, "past piece of the shaper is not finite");
+    FORGE_MEM(d.mem.phase[1].k = d.mem.phase[0].k, "phase of f_mode is not in order");
+    FORGE_MEM(d.mem.phase[1].P = d.mem.phase[0].P - 1.0, "phase of f_mode is not in order");
+    FORGE_MEM(d.mem.phase[0].k = DJL_MAX_PLAN_END + 1, "phase of f_mode is not in order");
+    FORGE_MEM(d.mem.phase[0].P = NAN, "phase of f_mode is not finite or its rate");
+    FORGE_MEM(d.mem.phase[0].rate = 0.0, "phase of f_mode is not finite or its rate");
+    FORGE_MEM(d.mem.phase[0].rate = 1e-300, "phase of f_mode is not finite or its rate");
+#undef FORGE_MEM
+    still_usable(c, t);
+    fmi2FreeFMUstate(c, &s);
+    fmi2FreeFMUstate(c, &s2);
+    free(buf);
+    free(forged);
+    fmi2FreeInstance(c);
+}
+
 /* Commanded moves (issue #12): inputs in Step Mode, f_mode changing at every step
  * with jerk_source = 2, an execute, a stop, another execute, bad inputs refused
  * naming them (the instance goes on), FMU state in the middle of a commanded move
@@ -800,6 +866,8 @@ static void run_entry_points(void)
         }
         s2 = s;
         expect_error(fmi2GetFMUstate(c, &s2), "state to overwrite");
+        expect_error(fmi2SerializedFMUstateSize(c, s, &size), "fmi2SerializedFMUstateSize: FMU "
+                     "state damaged"); /* a size is read from a checked state only */
         CHECK(fmi2Reset(c) == fmi2OK && fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0) == fmi2OK &&
               fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) == fmi2OK,
               "init");
@@ -988,6 +1056,7 @@ int main(int argc, char **argv)
     run_null_pointers();
     run_state_packing();
     run_forged_states();
+    run_forged_memory();
     run_commands(2);
     run_commands(3);
     run_issue21_landing();

@@ -506,6 +506,8 @@ static void run_entry_points(void)
         s2 = s;
         REFUSED(fmi3GetFMUState(c, &s2), "state to overwrite");
         REFUSED(fmi3SerializeFMUState(c, s, buf, sz), "checksum");
+        REFUSED(fmi3SerializedFMUStateSize(c, s, &sz), "fmi3SerializedFMUStateSize: FMU state "
+                "damaged"); /* a size is read from a checked state only */
         REFUSED(fmi3DeserializeFMUState(c, buf, sz, &s2), "state to overwrite");
         fmi3FreeFMUState(c, &s);
         free(buf);
