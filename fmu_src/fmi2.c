@@ -100,7 +100,8 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     s = (inst2 *)functions->allocateMemory(1, sizeof(inst2));
     if (!s) return NULL;
     s->cb = *functions;
-    model_init(&s->m, 2, instanceName, logger2, s, loggingOn != fmi2False);
+    model_init(&s->m, 2, instanceName, logger2, s, loggingOn != fmi2False,
+               functions->allocateMemory, functions->freeMemory);
     return s;
 }
 
@@ -110,6 +111,7 @@ void fmi2FreeInstance(fmi2Component c)
     fmi2CallbackFreeMemory fr;
     if (!s) return;
     fr = s->cb.freeMemory;
+    model_free(&s->m);
     fr(s);
 }
 

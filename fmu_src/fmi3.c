@@ -126,7 +126,7 @@ fmi3Instance fmi3InstantiateCoSimulation(
     }
     s->env = instanceEnvironment;
     s->log = logMessage;
-    model_init(&s->m, 3, instanceName, logger3, s, loggingOn);
+    model_init(&s->m, 3, instanceName, logger3, s, loggingOn, calloc, free);
     return s;
 }
 
@@ -149,7 +149,12 @@ fmi3Instance fmi3InstantiateScheduledExecution(
     return NULL;
 }
 
-void fmi3FreeInstance(fmi3Instance instance) { free(instance); }
+void fmi3FreeInstance(fmi3Instance instance)
+{
+    if (!instance) return;
+    model_free(&INST(instance)->m);
+    free(instance);
+}
 
 fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined,
                                        fmi3Float64 tolerance, fmi3Float64 startTime,

@@ -133,7 +133,11 @@ typedef struct model_instance {
     int logging_on;
     int category_on[DJL_LOG_N];
     model_work w; /* the model's work space */
-    model_data load; /* a state being checked, unpacked (model_state_check, model_state_load) */
+    /* a state being checked, unpacked (model_state_check, model_state_load): allocated at
+     * the first check with the importer's memory functions, freed by model_free */
+    model_data *load;
+    void *(*alloc)(size_t n, size_t size); /* calloc-like (FMI 2's allocateMemory) */
+    void (*release)(void *p);
 } model_instance;
 
 /* ------------------------------------------------------------------------ */

@@ -28,9 +28,9 @@ int model_allowed(model_instance *m, const char *fn, int mask)
 
 /* A fresh state: the header, state Instantiated, the model's start values.  Zeroed up to
  * the rings' entries, padding included (a state is checksummed whole); the entries are
- * never read beyond the rings' counts, so the rest is not touched (293 kB of an
- * instance's 620 kB, with m->load: memory the importer's calloc gave and that stays
- * unmapped until a shaper or a state restore uses it). */
+ * never read beyond the rings' counts, so the rest is not touched (263 kB of an
+ * instance's 322 kB: memory the importer's calloc gave and that stays unmapped until a
+ * shaper uses it). */
 static void defaults(model_data *d)
 {
     memset(d, 0, PACK_HEAD);
@@ -43,11 +43,15 @@ static void defaults(model_data *d)
 }
 
 void model_init(model_instance *m, int fmi_version, const char *instance_name,
-                model_logger logger, void *logger_env, int logging_on)
+                model_logger logger, void *logger_env, int logging_on,
+                void *(*alloc)(size_t n, size_t size), void (*release)(void *p))
 {
     int i;
     defaults(&m->d);
-    memset(&m->w, 0, sizeof m->w); /* every field but the rings' entries and m->load */
+    memset(&m->w, 0, sizeof m->w); /* every field but the rings' entries */
+    m->load = NULL;
+    m->alloc = alloc;
+    m->release = release;
     m->fmi_version = fmi_version;
     strncpy(m->instance_name, instance_name ? instance_name : "", sizeof(m->instance_name));
     m->instance_name[sizeof(m->instance_name) - 1] = '\0';
@@ -58,6 +62,12 @@ void model_init(model_instance *m, int fmi_version, const char *instance_name,
 }
 
 void model_reset(model_instance *m) { defaults(&m->d); }
+
+void model_free(model_instance *m)
+{
+    if (m->load) m->release(m->load);
+    m->load = NULL;
+}
 
 model_status model_enter_init(model_instance *m)
 {
@@ -85,8 +95,9 @@ model_status model_terminate(model_instance *m)
 /* A state is packed: the bytes of model_data up to the entries of the shaper's rings
  * (the header, the model's values, the rings' counts), then the live entries of each
  * ring in time order (a ring packed starts at 0: past_first = phase_first = 0).  The
- * rings take 263 kB of model_data and are empty unless a shaper keeps a replaced plan's
- * past or follows f_mode, so a state is about 30 kB, not 293 kB. */
+ * rings take 263 kB of model_data and hold a few entries at most times (none without a
+ * shaper; a piece of a replaced plan, a change of f_mode, within the shaper's window), so
+ * a state is about 30 kB; 293 kB with both rings full. */
 #define PAST_BYTES sizeof(djl_past_piece)
 #define PHASE_BYTES sizeof(djl_phase_point)
 #define MEM_FIELD(f) (offsetof(model_data, mem) + offsetof(djl_shaper_memory, f))
@@ -170,7 +181,8 @@ void model_state_unpack(const void *state, model_data *d)
 /* All the checks of a packed state of size bytes, which is unpacked into m->load (no
  * copy of a state on the stack: a state is 30 to 293 kB, more than the whole stack of a
  * thread in some importers; musl's default is 128 kB, and a copy on the stack here once
- * overflowed it). */
+ * overflowed it).  m->load is allocated at the first check (an instance that never
+ * restores a state does not carry its 293 kB). */
 static model_status verify(model_instance *m, const char *fn, const unsigned char *b, size_t size)
 {
     const char *flaw;
@@ -207,14 +219,18 @@ static model_status verify(model_instance *m, const char *fn, const unsigned cha
                             "shaper memory (%ld and %ld entries, from %ld and %ld)", fn,
                             (unsigned long)size, (long)n_past, (long)n_phase, (long)past_first,
                             (long)phase_first);
-    model_state_unpack(b, &m->load);
-    if (m->load.state != MS_INSTANTIATED && m->load.state != MS_INIT &&
-        m->load.state != MS_STEP && m->load.state != MS_TERMINATED) {
+    if (!m->load) {
+        m->load = (model_data *)m->alloc(1, sizeof(model_data));
+        if (!m->load) return model_refuse(m, "%s: out of memory (checking an FMU state)", fn);
+    }
+    model_state_unpack(b, m->load);
+    if (m->load->state != MS_INSTANTIATED && m->load->state != MS_INIT &&
+        m->load->state != MS_STEP && m->load->state != MS_TERMINATED) {
         snprintf(why, sizeof why, "state machine value %ld is not one a state can be saved in",
-                 (long)m->load.state);
+                 (long)m->load->state);
         flaw = why;
     } else {
-        flaw = model_state_flaw(&m->load);
+        flaw = model_state_flaw(m->load);
     }
     if (flaw) return model_refuse(m, "%s: FMU state refused: %s", fn, flaw);
     return ST_OK;
@@ -238,7 +254,7 @@ model_status model_state_load(model_instance *m, const char *fn, const void *byt
 
 void model_state_restore(model_instance *m)
 {
-    memcpy(&m->d, &m->load, PACK_HEAD);
-    memcpy(m->d.mem.past, m->load.mem.past, (size_t)m->load.mem.n_past * PAST_BYTES);
-    memcpy(m->d.mem.phase, m->load.mem.phase, (size_t)m->load.mem.n_phase * PHASE_BYTES);
+    memcpy(&m->d, m->load, PACK_HEAD);
+    memcpy(m->d.mem.past, m->load->mem.past, (size_t)m->load->mem.n_past * PAST_BYTES);
+    memcpy(m->d.mem.phase, m->load->mem.phase, (size_t)m->load->mem.n_phase * PHASE_BYTES);
 }

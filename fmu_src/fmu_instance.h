@@ -21,9 +21,13 @@
 #pragma GCC visibility push(hidden)
 #endif
 
-/* Initialise an instance (the model's start values, state Instantiated). */
+/* Initialise an instance (the model's start values, state Instantiated); alloc (calloc-like)
+ * and release are the memory functions of the check area of states, model_free releases
+ * it. */
 void model_init(model_instance *m, int fmi_version, const char *instance_name,
-                model_logger logger, void *logger_env, int logging_on);
+                model_logger logger, void *logger_env, int logging_on,
+                void *(*alloc)(size_t n, size_t size), void (*release)(void *p));
+void model_free(model_instance *m);
 void model_reset(model_instance *m);
 
 /* The call is allowed in the current state (mask of model_state), else log and
@@ -44,9 +48,9 @@ model_status model_terminate(model_instance *m);
  * alignment): header, size, token, checksum, the rings' counts against the size, the
  * state machine value and then the structure of everything a restore would bring back
  * (model_state_flaw: counts, indices, ordering, finiteness, limits, outputs consistent
- * with the plan), on the state unpacked into m->load.  A refusal is logged (naming fn)
- * and leaves the instance as it was; after ST_OK, model_state_restore makes m->load the
- * instance's data.  No state is ever copied to the stack. */
+ * with the plan), on the state unpacked into m->load (allocated at the first check: out
+ * of memory is a refusal).  A refusal is logged (naming fn) and leaves the instance as it
+ * was; after ST_OK, model_state_restore makes m->load the instance's data.  No state is ever copied to the stack. */
 size_t model_state_size(const model_data *d);  /* of d packed */
 size_t model_state_max_size(void);
 size_t model_state_stored_size(const void *state); /* its header's (a checked state) */

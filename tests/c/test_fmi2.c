@@ -624,6 +624,42 @@ static void run_forged_states(void)
     fmi2FreeInstance(c);
 }
 
+/* The check area of states is allocated at the first check, with the importer's
+ * allocateMemory: when that fails, the restore is refused (out of memory) and the instance
+ * goes on as it was; it is freed with the instance (ASan's leak check). */
+static int refuse_check_area;
+static void *alloc_but_check_area(size_t n, size_t size)
+{
+    if (refuse_check_area && n * size == sizeof(model_data)) return NULL;
+    return calloc(n, size);
+}
+
+static void run_check_area_allocation(void)
+{
+    fmi2CallbackFunctions fcb = {logger, alloc_but_check_area, free, NULL, NULL};
+    fmi2Component c = fmi2Instantiate("check area", fmi2CoSimulation, DJL_INSTANTIATION_TOKEN,
+                                      "file:///tmp", &fcb, fmi2False, fmi2True);
+    fmi2FMUstate s = NULL;
+    double t = 0.0;
+    int k;
+    CHECK(c != NULL, "instantiate");
+    CHECK(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) == fmi2OK, "setup");
+    CHECK(fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) == fmi2OK,
+          "init");
+    for (k = 0; k < 20; k++, t += 1e-3) fmi2DoStep(c, t, 1e-3, fmi2True);
+    CHECK(fmi2GetFMUstate(c, &s) == fmi2OK, "get (packing needs no check area)");
+    refuse_check_area = 1;
+    expect_error(fmi2SetFMUstate(c, s), "fmi2SetFMUstate: out of memory (checking an FMU state)");
+    still_usable(c, t);
+    refuse_check_area = 0;
+    CHECK(fmi2SetFMUstate(c, s) == fmi2OK, "set once memory is there: %s", last_message);
+    refuse_check_area = 1; /* allocated once: no further allocation */
+    CHECK(fmi2SetFMUstate(c, s) == fmi2OK, "set again: %s", last_message);
+    refuse_check_area = 0;
+    fmi2FreeFMUstate(c, &s);
+    fmi2FreeInstance(c);
+}
+
 /* The shaper's memory in a state, forged entry by entry (the packing puts each ring's live
  * entries in the bytes, so a forger reaches them): each flaw refused by name.  A ZVD shaper
  * timed by f_mode, f_mode changed and a target commanded: both rings hold entries. */
@@ -1057,6 +1093,7 @@ int main(int argc, char **argv)
     run_state_packing();
     run_forged_states();
     run_forged_memory();
+    run_check_area_allocation();
     run_commands(2);
     run_commands(3);
     run_issue21_landing();
