@@ -229,6 +229,10 @@ djl_status djl_start_offset(double t_start, double start_time, double Te, double
 #define DJL_SHAPER_SUM_TOLERANCE 1e-9
 /* Vibration tolerance of the EI shaper (5 %). */
 #define DJL_SHAPER_EI_VTOL 0.05
+/* With shaper_source = 2, the most periods of f_mode a sample may hold: f_mode <= 2 / Te
+ * (its period at least Te/2, as with jerk_source 2 and 3), so that the phase over the
+ * memory's window stays small (issue 21: f_mode = DBL_MAX made it infinite). */
+#define DJL_SHAPER_MAX_PHASE_RATE 2.0
 /* Entries of each ring of djl_shaper_memory (at most one per sample of the
  * window DJL_MAX_SHAPER_DELAY_SAMPLES + 2, and a margin). */
 #define DJL_SHAPER_RING (DJL_MAX_SHAPER_DELAY_SAMPLES + 8)

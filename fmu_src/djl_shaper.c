@@ -79,6 +79,11 @@ djl_status djl_shaper_design(const djl_shaper_params *sp, double Te, double f_mo
         (st = check_frequency(err, "f_mode", f_mode, "the input f_mode times the shaper's "
                               "impulses, shaper_source = 2")) != DJL_OK)
         return st;
+    if (sp->source == DJL_SHAPER_SOURCE_F_MODE && !(f_mode * Te <= DJL_SHAPER_MAX_PHASE_RATE))
+        return set_error(err, DJL_E_PARAM, "f_mode", f_mode,
+                         "f_mode = %g Hz: with shaper_source = 2 its period, %g s, must be at "
+                         "least Te/2 = %g s (f_mode at most %g Hz)", f_mode, 1.0 / f_mode,
+                         0.5 * Te, DJL_SHAPER_MAX_PHASE_RATE / Te);
     if (sp->kind != DJL_SHAPER_CUSTOM) {
         /* ZV, ZVD, EI for the mode (f, zeta): Td = 1 / (f sqrt(1 - zeta^2)),
          * K = exp(-zeta pi / sqrt(1 - zeta^2)) */
@@ -311,6 +316,18 @@ void djl_shaper_phase_rate(djl_shaper_memory *m, double s, double rate)
         m->phase_first = (m->phase_first + 1) % DJL_SHAPER_RING;
         m->n_phase--;
     }
+    /* no read goes back further than the window from the current sample: the first entry,
+     * when it starts before b - SHAPER_WINDOW - 1, is moved there, its phase counted from
+     * the next entry's (or 0), so that no phase difference spans more than the window
+     * (issue 21: after a rest of 10^6 s the phase was the rate times 10^9 samples, and
+     * differences of such phases lost their digits; with f_mode = DBL_MAX it overflowed
+     * and the outputs became NaN) */
+    if (PHASE(m, 0).k < b - SHAPER_WINDOW - 1) {
+        djl_phase_point *f0 = &PHASE(m, 0);
+        int64_t k0 = b - SHAPER_WINDOW - 1;
+        f0->P = m->n_phase >= 2 ? PHASE(m, 1).P - f0->rate * (double)(PHASE(m, 1).k - k0) : 0.0;
+        f0->k = k0;
+    }
     if (m->n_phase == DJL_SHAPER_RING) { /* cannot happen (one entry a sample of the window) */
         m->phase_first = (m->phase_first + 1) % DJL_SHAPER_RING;
         m->n_phase--;
@@ -473,7 +490,8 @@ const char *djl_shaper_memory_flaw(const djl_shaper_memory *m, const djl_shaper 
         /* the rate of an f_mode accepted: no delay beyond the memory's window */
         if (!djl_isfinite(e->P) || !(djl_isfinite(e->rate) && e->rate > 0.0 &&
                                      e->rate >= 0.999999 * sh->phase_max /
-                                                    (double)DJL_MAX_SHAPER_DELAY_SAMPLES))
+                                                    (double)DJL_MAX_SHAPER_DELAY_SAMPLES &&
+                                     e->rate <= DJL_SHAPER_MAX_PHASE_RATE * (1.0 + 1e-9)))
             return "the phase of f_mode is not finite or its rate out of range";
     }
     return NULL;

@@ -311,6 +311,12 @@ static model_status set_input(model_instance *m, const model_var *v, double valu
                                 "is kept)", value, 1.0 / value, DJL_MAX_FILTER_SAMPLES, d->p.Te,
                                 d->f_mode);
         if (d->planned && d->shaper.n > 0 && d->shaper.source == DJL_SHAPER_SOURCE_F_MODE &&
+            !(value * d->p.Te <= DJL_SHAPER_MAX_PHASE_RATE))
+            return model_refuse(m, "set: invalid input f_mode = %g Hz: with shaper_source = 2 its "
+                                "period, %g s, must be at least Te/2 = %g s (f_mode at most %g "
+                                "Hz; the previous value, %g Hz, is kept)", value, 1.0 / value,
+                                0.5 * d->p.Te, DJL_SHAPER_MAX_PHASE_RATE / d->p.Te, d->f_mode);
+        if (d->planned && d->shaper.n > 0 && d->shaper.source == DJL_SHAPER_SOURCE_F_MODE &&
             !(d->shaper.phase_max / (value * d->p.Te) <= (double)DJL_MAX_SHAPER_DELAY_SAMPLES))
             return model_refuse(m, "set: invalid input f_mode = %g Hz: with shaper_source = 2 the "
                                 "shaper's last impulse would be %g samples of Te = %g s late, "

@@ -660,6 +660,75 @@ static void run_check_area_allocation(void)
     fmi2FreeInstance(c);
 }
 
+/* A ZVD shaper timed by f_mode (shaper_source = 2) whose phase history spans a long rest
+ * (issue 21, third session: fuzz_state found NaN outputs after an OK step, f_mode = DBL_MAX
+ * accepted and rests of 10^6 s: the phase overflowed).  f_mode above 2/Te is refused (its
+ * period under Te/2, as for jerk_source 2 and 3); and a move after a rest of 10^6 s gives,
+ * sample for sample, what it gives after a rest of 1 s (the shaped output depends on the
+ * phase within the shaper's window only: a time shift), to the resolution of a time of
+ * 10^9 samples in a double: 2 ulp(10^9) samples of travel at the move's top speed
+ * (2.4e-10 m here; 4.3e-11 m measured).  Before the fix the phase spanned the whole rest
+ * and kept fewer digits: 4.5e-10 m. */
+static void run_fmode_phase_long_rest(void)
+{
+    fmi2ValueReference vr_shaper = VR_SHAPER, vr_source = VR_SHAPER_SOURCE, vr_x = VR_EXECUTE;
+    fmi2ValueReference outs[3] = {VR_X, VR_V, VR_A};
+    fmi2Integer zvd = SHAPER_ZVD, by_fmode = SHAPER_SOURCE_F_MODE;
+    fmi2Boolean on = fmi2True;
+    static double rec[2][3000][3];
+    double worst = 0.0, vtop = 0.0, tol;
+    int w, k;
+    for (w = 0; w < 2; w++) {
+        fmi2Component c = make(w ? "rest 1e9 s" : "rest 1 s");
+        double t = 0.0, rest = w ? 1e6 : 1.0, f;
+        fmi2Real big = DBL_MAX, above = 2.0 / 1e-3 * (1.0 + 1e-12), top = 2.0 / 1e-3;
+        CHECK(fmi2SetInteger(c, &vr_shaper, 1, &zvd) == fmi2OK, "shaper");
+        CHECK(fmi2SetInteger(c, &vr_source, 1, &by_fmode) == fmi2OK, "shaper_source");
+        set_real(c, VR_F_MODE, 12.0);
+        CHECK(fmi2EnterInitializationMode(c) == fmi2OK, "enter");
+        CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit: %s", last_message);
+        for (k = 0; k < 2000; k++, t += 1e-3)
+            CHECK(fmi2DoStep(c, t, 1e-3, fmi2True) == fmi2OK, "step: %s", last_message);
+        if (w == 0) {
+            fmi2ValueReference vf = VR_F_MODE;
+            expect_error(fmi2SetReal(c, &vf, 1, &big), "its period, 5.56268e-309 s, must be "
+                         "at least Te/2 = 0.0005 s (f_mode at most 2000 Hz");
+            expect_error(fmi2SetReal(c, &vf, 1, &above), "must be at least Te/2");
+            CHECK(fmi2SetReal(c, &vf, 1, &top) == fmi2OK, "f_mode = 2/Te: %s", last_message);
+            CHECK(fmi2DoStep(c, t, 1e-3, fmi2True) == fmi2OK, "step at f_mode 2/Te");
+            t += 1e-3;
+            set_real(c, VR_F_MODE, 12.0);
+            CHECK(fmi2DoStep(c, t, 1e-3, fmi2True) == fmi2OK, "step");
+            t += 1e-3;
+        } else {
+            for (k = 0; k < 2; k++, t += 1e-3) fmi2DoStep(c, t, 1e-3, fmi2True);
+        }
+        CHECK(fmi2DoStep(c, t, rest, fmi2True) == fmi2OK, "rest: %s", last_message);
+        t += rest;
+        set_real(c, VR_TARGET, 0.1);
+        CHECK(fmi2SetBoolean(c, &vr_x, 1, &on) == fmi2OK, "execute");
+        for (k = 0; k < 3000; k++, t += 1e-3) {
+            f = 12.0 + 3.0 * sin(0.01 * k); /* f_mode moving all along the move */
+            set_real(c, VR_F_MODE, f);
+            CHECK(fmi2DoStep(c, t, 1e-3, fmi2True) == fmi2OK, "step %d: %s", k, last_message);
+            CHECK(fmi2GetReal(c, outs, 3, rec[w][k]) == fmi2OK, "outputs");
+            CHECK(isfinite(rec[w][k][0]) && isfinite(rec[w][k][1]) && isfinite(rec[w][k][2]),
+                  "finite outputs");
+        }
+        fmi2FreeInstance(c);
+    }
+    for (k = 0; k < 3000; k++) {
+        double dx = fabs(rec[0][k][0] - rec[1][k][0]);
+        if (dx > worst) worst = dx;
+        if (fabs(rec[0][k][1]) > vtop) vtop = fabs(rec[0][k][1]);
+    }
+    tol = 2.0 * (nextafter(1e9, 2e9) - 1e9) * 1e-3 * vtop;
+    if (getenv("TEST_VERBOSE")) printf("long rest: %g m, allowed %g m (top speed %g m/s)\n", worst, tol, vtop);
+    CHECK(worst <= tol, "after a rest of 1e6 s the shaped move differs by %g m (allowed %g m)",
+          worst, tol);
+    CHECK(fabs(rec[1][2999][0] - 0.1) <= 1e-12, "the move ends at %.17g", rec[1][2999][0]);
+}
+
 /* The shaper's memory in a state, forged entry by entry (the packing puts each ring's live
  * entries in the bytes, so a forger reaches them): each flaw refused by name.  A ZVD shaper
  * timed by f_mode, f_mode changed and a target commanded: both rings hold entries. */
@@ -717,6 +786,7 @@ static void run_forged_memory(void)
     FORGE_MEM(d.mem.phase[0].P = NAN, "phase of f_mode is not finite or its rate");
     FORGE_MEM(d.mem.phase[0].rate = 0.0, "phase of f_mode is not finite or its rate");
     FORGE_MEM(d.mem.phase[0].rate = 1e-300, "phase of f_mode is not finite or its rate");
+    FORGE_MEM(d.mem.phase[0].rate = 2.5, "phase of f_mode is not finite or its rate");
 #undef FORGE_MEM
     still_usable(c, t);
     fmi2FreeFMUstate(c, &s);
@@ -1093,6 +1163,7 @@ int main(int argc, char **argv)
     run_state_packing();
     run_forged_states();
     run_forged_memory();
+    run_fmode_phase_long_rest();
     run_check_area_allocation();
     run_commands(2);
     run_commands(3);

@@ -181,18 +181,27 @@ static void run(fuzz_reader *r)
         if (op % 8 == 2) {
             double x = rd_double(r);
             fmi2ValueReference vt = VR_TARGET;
+            int ex = rd_u8(r) & 1;
             (void)fmi2SetReal(inst, &vt, 1, &x);
-            (void)try_bool(inst, VR_EXECUTE, rd_u8(r) & 1);
+            (void)try_bool(inst, VR_EXECUTE, ex);
+            if (getenv("FUZZ_VERBOSE")) fprintf(stderr, "target := %.17g, execute %d\n", x, ex);
         }
         if (op % 8 == 3) {
             double x = rd_double(r);
             fmi2ValueReference vf = VR_F_MODE;
             (void)fmi2SetReal(inst, &vf, 1, &x);
+            if (getenv("FUZZ_VERBOSE")) fprintf(stderr, "f_mode := %.17g\n", x);
         }
         t = try_real(inst, VR_TIME);
         if (!(Te > 0.0) || !(t == t)) break;
         h = op & 0x80 ? Te * (double)(1 + rd_u32(r) % 1000000) : Te * (double)(1 + op % 4);
         if (fmi2DoStep(inst, t, h, fmi2True) != fmi2OK) break;
+        if (getenv("FUZZ_VERBOSE")) {
+            double o[3];
+            (void)fmi2GetReal(inst, vrs, 3, o);
+            fprintf(stderr, "step %d: t %.17g + h %.17g (op %u): x %.17g v %.17g a %.17g\n", k,
+                    t, h, (unsigned)op, o[0], o[1], o[2]);
+        }
         FUZZ_CHECK(fmi2GetReal(inst, vrs, 7, out) == fmi2OK, "get outputs");
         for (i = 0; i < 7; i++)
             FUZZ_CHECK(isfinite(out[i]), "output %u = %g after an OK step (step %d)", vrs[i],
@@ -245,6 +254,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 at = pick_offset(&r, 1, n_work);
                 ((unsigned char *)&work)[at] = rd_u8(&r);
             }
+            if (getenv("FUZZ_VERBOSE"))
+                fprintf(stderr, "base %d: patch %d at byte %lu (kind %d)\n", which, k,
+                        (unsigned long)at, how % 4);
+            if (getenv("FUZZ_NO_PATCH")) /* (debugging: is the patch what matters?) */
+                memcpy((char *)&work + at, (const char *)&base[which] + at, 8);
         }
         if (mode % 8 != 7) model_state_seal(&work, n_work);
         accepted = fmi2DeSerializeFMUstate(inst, (const fmi2Byte *)&work, n_work, &s) == fmi2OK;
