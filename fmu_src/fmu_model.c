@@ -12,6 +12,7 @@
 #include "fmu_model.h"
 #include "djl_math.h" /* floor, fmax, ... without libm (see there) */
 
+#include <float.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -700,7 +701,15 @@ static model_status commands(model_instance *m, double t, double u0, double du)
         if (d->jerk_source == JERK_SOURCE_F_MODE_AHEAD) {
             /* f_mode's rate of change over the last step, then each stage's jerk time
              * from f_mode extrapolated to where the plan starts it */
-            if (t > d->t_seen) d->f_rate = (d->f_mode - d->f_seen) / (t - d->t_seen);
+            if (t > d->t_seen) {
+                /* a change over a vanishing step (10^-310 s) overflows: a rate beyond the
+                 * doubles is the largest one (its extrapolation is out of range either way,
+                 * and the stages keep f_mode's own jerk time); a state holds finite values
+                 * only (issue 21, third session: the FMU refused such a state it had
+                 * saved) */
+                double r = (d->f_mode - d->f_seen) / (t - d->t_seen);
+                d->f_rate = djl_isfinite(r) ? r : r > 0.0 ? DBL_MAX : -DBL_MAX;
+            }
             d->f_seen = d->f_mode;
             d->t_seen = t;
             predicted_jerk_times(d, u0, g.N);

@@ -729,6 +729,42 @@ static void run_fmode_phase_long_rest(void)
     CHECK(fabs(rec[1][2999][0] - 0.1) <= 1e-12, "the move ends at %.17g", rec[1][2999][0]);
 }
 
+/* jerk_source = 3 measures f_mode's rate of change over each step: over a step of
+ * 10^-310 s a change of 990 Hz overflowed to an infinite rate, and the FMU refused the
+ * state it then saved (fuzz_fmi, third session).  The rate is the largest double: the
+ * state is accepted back, the outputs stay finite and the move lands. */
+static void run_fmode_rate_overflow(void)
+{
+    fmi2Component c = make("f_mode rate");
+    fmi2ValueReference vjs = VR_JERK_SOURCE;
+    fmi2Integer ahead = JERK_SOURCE_F_MODE_AHEAD;
+    fmi2FMUstate s = NULL;
+    double t = 0.0, h = 1e-310;
+    int k;
+    CHECK(fmi2SetInteger(c, &vjs, 1, &ahead) == fmi2OK, "jerk_source");
+    set_real(c, VR_F_MODE, 10.0);
+    CHECK(fmi2EnterInitializationMode(c) == fmi2OK, "enter");
+    CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit: %s", last_message);
+    /* from t = 0, where 1e-310 s is a time a double holds: a step of it, f_mode changed,
+     * and the next step measures the change over it */
+    CHECK(fmi2DoStep(c, t, h, fmi2True) == fmi2OK, "a step of 1e-310 s: %s", last_message);
+    t += h;
+    set_real(c, VR_F_MODE, 1000.0);
+    CHECK(fmi2DoStep(c, t, h, fmi2True) == fmi2OK, "again: %s", last_message);
+    t += h;
+    CHECK(fmi2GetFMUstate(c, &s) == fmi2OK, "get");
+    CHECK(fmi2SetFMUstate(c, s) == fmi2OK, "the state it saved: %s", last_message);
+    set_real(c, VR_F_MODE, 10.0);
+    for (k = 0; k < 3000; k++) {
+        CHECK(fmi2DoStep(c, t, 1e-3, fmi2True) == fmi2OK, "step: %s", last_message);
+        t += 1e-3;
+        CHECK(isfinite(get_real(c, VR_X)) && isfinite(get_real(c, VR_V)), "finite outputs");
+    }
+    CHECK(fabs(get_real(c, VR_X) - 0.4) <= 1e-12, "lands at %.17g", get_real(c, VR_X));
+    fmi2FreeFMUstate(c, &s);
+    fmi2FreeInstance(c);
+}
+
 /* The shaper's memory in a state, forged entry by entry (the packing puts each ring's live
  * entries in the bytes, so a forger reaches them): each flaw refused by name.  A ZVD shaper
  * timed by f_mode, f_mode changed and a target commanded: both rings hold entries. */
@@ -1164,6 +1200,7 @@ int main(int argc, char **argv)
     run_forged_states();
     run_forged_memory();
     run_fmode_phase_long_rest();
+    run_fmode_rate_overflow();
     run_check_area_allocation();
     run_commands(2);
     run_commands(3);
