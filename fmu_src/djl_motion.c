@@ -839,7 +839,11 @@ static int plan_big(const djl_plan *pl, double big[7])
 }
 
 /* The largest magnitude of each quantity over the pieces (plan_big: 0 if one is not
- * finite), then whether the plan is clean. */
+ * finite), then whether the plan is clean: no quantity wholly subnormal, and the
+ * acceleration within the larger limit up to rounding (issue 21, third session: with
+ * a_max = d_max = 2.2e-308 m/s^2 and Te = 1e-9 s the jerk of a sample, 2.8e-316, is
+ * subnormal and keeps 8 digits: a level came out 8e-8 above a_max; in scaled units it
+ * does not). */
 static int plan_clean(const djl_plan *pl)
 {
     double big[7];
@@ -847,7 +851,7 @@ static int plan_clean(const djl_plan *pl)
     if (!plan_big(pl, big)) return 0;
     for (q = 0; q < 7; q++)
         if (big[q] != 0.0 && big[q] < DJL_MIN_MAGNITUDE) return 0;
-    return 1;
+    return big[2] <= dmax2(pl->p.a_max, pl->p.d_max) * (1.0 + 1e-12);
 }
 
 /* Units in which the problem is ordinary: lengths in 2^-kl m (the total

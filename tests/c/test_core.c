@@ -598,6 +598,31 @@ static void issue21_cases(void)
         FAIL("issue 21, 1e15 m at a_max = 1e-300: %s %s: %s", djl_status_name(st), e.param,
              e.message);
     horizon_sweep();
+    /* a_max = d_max = DBL_MIN, Te = 1e-9 s, JL with DBL_MIN segments (fuzz_plan, third
+     * session): the jerk of a sample is subnormal and a level came out 8e-8 above a_max;
+     * such a plan is made again in scaled units */
+    djl_params_default(&p);
+    p.profile = DJL_PROFILE_JL;
+    p.short_stage = DJL_SHORT_OVERLAP;
+    p.Te = 1.0000000000000001e-09;
+    p.x0 = 0.1;
+    p.v0 = 2.2250738585072014e-308;
+    p.v_max = 0.1;
+    p.a_max = p.d_max = 2.2250738585072014e-308;
+    p.T_F[1] = 2.2250738585072014e-308;
+    p.n_segments = 9;
+    for (i = 0; i < 9; i++) p.seg_distance[i] = p.seg_v_end[i] = 0.0;
+    p.seg_distance[0] = p.seg_distance[1] = 2.2250738585072014e-308;
+    st = djl_plan_motion(&p, &plan, &e);
+    if (st == DJL_OK) {
+        for (i = 0; i < plan.n_pieces; i++)
+            if (fabs(plan.piece[i].a) > p.a_max * (1.0 + 1e-12))
+                FAIL("issue 21, a_max = DBL_MIN: piece %d: |a| = %.17g above a_max %.17g", i,
+                     fabs(plan.piece[i].a), p.a_max);
+        check_plan(-1, &p);
+    } else if (st != DJL_E_INFEASIBLE) {
+        FAIL("issue 21, a_max = DBL_MIN: %s: %s", djl_status_name(st), e.message);
+    }
 }
 
 /* The cases of issue #10 item 6, every run. */
