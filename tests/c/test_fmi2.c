@@ -823,6 +823,34 @@ static void run_forged_memory(void)
     FORGE_MEM(d.mem.phase[0].rate = 0.0, "phase of f_mode is not finite or its rate");
     FORGE_MEM(d.mem.phase[0].rate = 1e-300, "phase of f_mode is not finite or its rate");
     FORGE_MEM(d.mem.phase[0].rate = 2.5, "phase of f_mode is not finite or its rate");
+    /* a phase of f_mode in the state of a shaper timed by f_shaper */
+    {
+        fmi2Component c1 = make("forged memory, f_shaper");
+        fmi2FMUstate s1 = NULL;
+        fmi2Byte *buf1;
+        size_t size1 = 0;
+        double t1 = 0.0;
+        CHECK(fmi2SetInteger(c1, &vr_shaper, 1, &zvd) == fmi2OK, "shaper");
+        set_real(c1, VR_F_SHAPER, 7.0);
+        CHECK(fmi2EnterInitializationMode(c1) == fmi2OK && fmi2ExitInitializationMode(c1) ==
+              fmi2OK, "init: %s", last_message);
+        for (k = 0; k < 30; k++, t1 += 1e-3) fmi2DoStep(c1, t1, 1e-3, fmi2True);
+        CHECK(fmi2GetFMUstate(c1, &s1) == fmi2OK &&
+              fmi2SerializedFMUstateSize(c1, s1, &size1) == fmi2OK, "get");
+        buf1 = (fmi2Byte *)malloc(size1);
+        CHECK(fmi2SerializeFMUstate(c1, s1, buf1, size1) == fmi2OK, "serialize");
+        model_state_unpack(buf1, &d);
+        d.mem.n_phase = 1;
+        d.mem.phase[0].k = 0;
+        d.mem.phase[0].P = 0.0;
+        d.mem.phase[0].rate = 0.007;
+        model_state_pack(&d, forged);
+        expect_error(fmi2DeSerializeFMUstate(c1, forged, model_state_size(&d), &s2),
+                     "a phase of f_mode with a shaper timed for f_shaper");
+        free(buf1);
+        fmi2FreeFMUstate(c1, &s1);
+        fmi2FreeInstance(c1);
+    }
 #undef FORGE_MEM
     still_usable(c, t);
     fmi2FreeFMUstate(c, &s);
