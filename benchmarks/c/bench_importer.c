@@ -7,33 +7,7 @@
  *
  * usage: bench_importer LIB GUID RESOURCE_URI VR_X VR_V VR_A VR_J TE SAMPLES REPEATS
  */
-#include <dlfcn.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <time.h>
-
-#include "fmi2Functions.h"
-
-static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
-                   fmi2String category, fmi2String message, ...)
-{
-    (void)env;
-    if (status >= fmi2Error) fprintf(stderr, "[%s] %s: %s\n", name, category, message);
-}
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-#define LOAD(type, name)                                                              \
-    type name = (type)dlsym(lib, #name);                                              \
-    if (!name) {                                                                      \
-        fprintf(stderr, "missing %s\n", #name);                                       \
-        return 2;                                                                     \
-    }
+#include "bench_fmi2.h" /* logger, now, LOAD */
 
 int main(int argc, char **argv)
 {
