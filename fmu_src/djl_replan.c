@@ -78,8 +78,6 @@ static void gather(const djl_plan *old, double u, replan_state *r)
             } else {
                 r->settled += st->A;
             }
-        } else if (st->tau == r->o && st->N == 0) {
-            r->a -= st->A; /* an unfiltered step at o, dropped: its jump is in s.a */
         }
     }
     /* a rounding residue of +A - A is no acceleration (relative to the levels summed, not

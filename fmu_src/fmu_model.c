@@ -136,10 +136,13 @@ static model_status check_range(model_instance *m, const char *fn, double off)
     const model_data *d = &m->d;
     const djl_plan *pl = &d->plan;
     double H = (double)DJL_MAX_MOTION_SAMPLES, Te = d->p.Te, before, after, x;
-    if (!(Te * H <= DJL_MAX_POSITION && djl_fabs(d->start_time) + Te * H <= DJL_MAX_POSITION))
+    if (!(Te * H <= DJL_MAX_POSITION))
         return model_fail(m, "%s: invalid parameter Te = %g s: the FMU's horizon of %g samples "
-                          "from the start time %g s would end beyond %g s", fn, Te, H,
-                          d->start_time, DJL_MAX_POSITION);
+                          "would last beyond %g s", fn, Te, H, DJL_MAX_POSITION);
+    if (!(djl_fabs(d->start_time) + Te * H <= DJL_MAX_POSITION))
+        return model_fail(m, "%s: invalid start time %g s: the FMU's horizon of %g samples of "
+                          "Te = %g s from it would end beyond %g s", fn, d->start_time, H, Te,
+                          DJL_MAX_POSITION);
     before = off > 0.0 ? off : 0.0; /* samples before the motion starts */
     x = djl_fabs(d->p.x0) + djl_fabs(d->p.v0) * (before * Te);
     if (!(x <= DJL_MAX_POSITION))

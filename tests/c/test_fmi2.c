@@ -47,7 +47,7 @@ static void set_real(fmi2Component c, fmi2ValueReference vr, double v)
 static double get_real(fmi2Component c, fmi2ValueReference vr)
 {
     double v = NAN;
-    CHECK(fmi2GetReal(c, &vr, 1, &v) == fmi2OK, "get %u", vr);
+    CHECK(fmi2GetReal(c, &vr, 1, &v) == fmi2OK, "get %u: %s", vr, last_message);
     return v;
 }
 
@@ -195,6 +195,103 @@ static void run_bad_inputs(void)
           "ME");
     /* null instance */
     CHECK(fmi2DoStep(NULL, 0.0, 1e-3, fmi2True) == fmi2Error, "null");
+}
+
+static void set_int(fmi2Component c, fmi2ValueReference vr, int v)
+{
+    CHECK(fmi2SetInteger(c, &vr, 1, &v) == fmi2OK, "set %u", vr);
+}
+
+/* Initialisation refused with `fragment` in the message; then the instance is usable
+ * again: after a reset (a parameter refused: the instance is in Error), the default move
+ * lands on 0.4 m; or, an input refused (f_mode: the instance stays in Initialization Mode),
+ * once f_mode is set to 10 Hz the move lands on 0.4 m. */
+static void refused_at_init(fmi2Component c, const char *fragment, int input)
+{
+    int k;
+    fmi2EnterInitializationMode(c);
+    expect_error(fmi2ExitInitializationMode(c), fragment);
+    if (input) {
+        set_real(c, VR_F_MODE, 10.0);
+        CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "initialisation with f_mode = 10 Hz: %s",
+              last_message);
+    } else {
+        CHECK(isfinite(get_real(c, VR_X)) && isfinite(get_real(c, VR_V)),
+              "outputs after refusal");
+        CHECK(fmi2Reset(c) == fmi2OK, "reset after the refusal");
+        CHECK(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) == fmi2OK, "setup");
+        CHECK(fmi2EnterInitializationMode(c) == fmi2OK &&
+                  fmi2ExitInitializationMode(c) == fmi2OK,
+              "initialisation after reset: %s", last_message);
+    }
+    for (k = 0; k < 1200; k++) fmi2DoStep(c, k * 1e-3, 1e-3, fmi2True);
+    CHECK(fabs(get_real(c, VR_X) - 0.4) < 1e-12 && get_real(c, VR_V) == 0.0,
+          "the default move after the refusal: x = %.17g", get_real(c, VR_X));
+    fmi2FreeInstance(c);
+}
+
+/* The refusals of what no output may reach (the FMU's horizon, the position after a
+ * multi-segment motion, a shaped motion past the horizon, a time-varying custom shaper
+ * delayed past the memory window), each reached and named. */
+static void run_range_refusals(void)
+{
+    fmi2Component c;
+    int i;
+    /* a start time whose horizon (10^15 samples) ends beyond 10^300 s */
+    c = make("far_start");
+    CHECK(fmi2SetupExperiment(c, fmi2False, 0.0, 2e300, fmi2False, 0.0) == fmi2OK, "setup");
+    set_real(c, VR_T_START, 2e300);
+    refused_at_init(c, "invalid start time 2e+300 s: the FMU's horizon of 1e+15 samples of "
+                       "Te = 0.001 s from it would end beyond 1e+300 s", 0);
+    /* a Te whose horizon lasts beyond 10^300 s (the jerk times at least Te/2) */
+    c = make("huge_Te");
+    set_real(c, VR_TE, 1e290);
+    for (i = 0; i < 4; i++) set_real(c, VR_T_F1 + (fmi2ValueReference)i, 1e290);
+    set_real(c, VR_DISTANCE, 0.0);
+    refused_at_init(c, "invalid parameter Te = 1e+290 s: the FMU's horizon of 1e+15 samples "
+                       "would last beyond 1e+300 s", 0);
+    /* a multi-segment motion ending at 10^300 m/s: the position would overflow after it */
+    c = make("overflow_after_segments");
+    set_real(c, VR_V_MAX, 1e300);
+    set_real(c, VR_V0, 1e300);
+    set_int(c, VR_N_SEGMENTS, 2);
+    for (i = 0; i < 2; i++) {
+        set_real(c, VR_SEG_DISTANCE + (fmi2ValueReference)i, 1e299);
+        set_real(c, VR_SEG_V_END + (fmi2ValueReference)i, 1e300);
+    }
+    refused_at_init(c, "invalid parameter seg_v_end[2] = 1e+300 m/s: after the motion the "
+                       "position grows at 1e+300 m/s", 0);
+    /* a motion of 10^15 - 200 samples (11 segments, AL at 1 m/s) shaped by ZV at 1 Hz,
+     * whose last impulse comes 500 samples later: past the horizon */
+    c = make("shaped_past_horizon");
+    set_int(c, VR_PROFILE, 1);
+    set_real(c, VR_V_MAX, 1.0);
+    set_real(c, VR_A_MAX, 1000.0);
+    set_real(c, VR_D_MAX, 1000.0);
+    set_int(c, VR_N_SEGMENTS, 11);
+    for (i = 0; i < 11; i++) {
+        set_real(c, VR_SEG_DISTANCE + (fmi2ValueReference)i, i < 10 ? 1e11 - 10.0 : 99.8);
+        set_real(c, VR_SEG_V_END + (fmi2ValueReference)i, i < 10 ? 1.0 : 0.0);
+    }
+    set_int(c, VR_SHAPER, 1);
+    set_real(c, VR_F_SHAPER, 1.0);
+    refused_at_init(c, "invalid parameter shaper = 1: the motion of 999999999999800 samples "
+                       "and the shaper's last impulse, 500 samples later, exceed the 1e+15 "
+                       "samples a motion may take", 0);
+    /* a custom shaper timed by f_mode whose second impulse, 0.05 s at f_shaper = 10 Hz,
+     * comes 50 s late at the starting f_mode = 0.01 Hz: beyond the 4096 samples kept */
+    c = make("custom_delay_past_window");
+    set_int(c, VR_SHAPER, 4);
+    set_int(c, VR_SHAPER_SOURCE, 2);
+    set_int(c, VR_SHAPER_N, 2);
+    set_real(c, VR_F_SHAPER, 10.0);
+    set_real(c, VR_SHAPER_AMPLITUDE, 0.5);
+    set_real(c, VR_SHAPER_AMPLITUDE + 1, 0.5);
+    set_real(c, VR_SHAPER_DELAY + 1, 0.05);
+    set_real(c, VR_F_MODE, 0.01);
+    refused_at_init(c, "invalid input f_mode = 0.01 Hz: with shaper_source = 2, "
+                       "shaper_delay[2] = 0.05 s at f_shaper = 10 Hz becomes 50 s, 50000 "
+                       "samples of Te = 0.001 s: more than the 4096 samples", 1);
 }
 
 static void run_two_instances(void)
@@ -1222,6 +1319,7 @@ int main(int argc, char **argv)
     long n_sealed = argc > 2 ? atol(argv[2]) : n_fuzz / 10;
     run_states();
     run_bad_inputs();
+    run_range_refusals();
     run_two_instances();
     run_null_pointers();
     run_state_packing();
