@@ -44,6 +44,16 @@ typedef struct {
     double Te, v_max, a_max, d_max;
 } replan_state;
 
+/* dv / (a Te), samples of the acceleration a for the velocity change dv: as written when
+ * a Te is a normal double, else as dv / a / Te (a Te below the normal doubles keeps only
+ * some of its digits: issue 21, a stop at d_max = DBL_MIN with Te = 1e-9 s came 80 samples
+ * short and its deceleration 8e-8 above d_max). */
+static double per_sample(double dv, double a, double Te)
+{
+    double aTe = a * Te;
+    return djl_fabs(aTe) >= DJL_MIN_MAGNITUDE ? dv / aTe : dv / a / Te;
+}
+
 static void gather(const djl_plan *old, double u, replan_state *r)
 {
     djl_sample s;
@@ -130,7 +140,7 @@ static int stop_steps(double v, int64_t t0, const int32_t N[4], double d_max, do
 {
     double n3 = N[2], n4 = N[3], lag = 0.5 * (n4 - n3), m, d, sg = v < 0.0 ? -1.0 : 1.0;
     if (v == 0.0) return 0;
-    m = djl_ceil(djl_fabs(v) / (d_max * Te) - lag);
+    m = djl_ceil(per_sample(djl_fabs(v), d_max, Te) - lag);
     m = dmax2(m, dmax2(n3, 1.0));
     /* (a stop this long ends past DJL_MAX_PLAN_END: compose refuses it) */
     if (m > 4e15) m = 4e15;
@@ -197,7 +207,8 @@ static void end_stage(const replan_state *r, transition *t, int64_t e, int32_t N
     over = djl_fabs(v_s) - r->v_max;
     if (over > 1e-12 * r->v_max && N > 0) {
         /* shorten the filter when the level pushes the speed up, else lengthen it */
-        double cut = djl_ceil(over / (djl_fabs(r->level) * r->Te * 0.5)), N0 = t->s[0].N;
+        double cut = djl_ceil(2.0 * per_sample(over, djl_fabs(r->level), r->Te));
+        double N0 = t->s[0].N;
         double N2 = (r->level > 0.0) == (v_s > 0.0)
                         ? dmax2(N0 - cut, dmax2(Nmin, 1.0))
                         : dmin2(N0 + cut, (double)DJL_MAX_FILTER_SAMPLES);
@@ -220,7 +231,7 @@ static void no_reversal(const replan_state *r, transition *t)
     settle(r, t->s, 1, &v_s, &X_s);
     rev = -sv * v_s;
     if (rev > 1e-12 * r->v_max) {
-        double cut = djl_ceil(rev / (djl_fabs(r->level) * r->Te * 0.5));
+        double cut = djl_ceil(2.0 * per_sample(rev, djl_fabs(r->level), r->Te));
         double Nmin = (double)(stage_start_end(r) - t->s[0].tau);
         t->s[0].N = (int32_t)dmax2((double)t->s[0].N - cut, dmax2(Nmin, 1.0));
         t->clipped = 2;
@@ -269,7 +280,7 @@ static void choose_end(const replan_state *r, transition *t, int32_t Nend, const
     /* a weak stage (as that of a small move, its level far below a_max) is not
      * worth going on with: the new motion may use a_max */
     if (djl_fabs(r->level) < 0.5 * r->a_max) return;
-    room = (r->v_max - sg * v_s) / (djl_fabs(r->level) * r->Te);
+    room = per_sample(r->v_max - sg * v_s, djl_fabs(r->level), r->Te);
     if (!(room >= 1.0)) return;
     lo = b;                                          /* satisfies both */
     hi = b + (int64_t)dmin2(djl_floor(room), 1e12);  /* satisfies v_max */
@@ -334,7 +345,7 @@ static void stop_transition(const replan_state *r, transition *t, const int32_t 
         double q, e, f;
         on = *t;
         v_s = settled_v(r, on.s, 1);
-        q = v_s * r->level < 0.0 ? -v_s / (r->level * r->Te) : -1.0;
+        q = v_s * r->level < 0.0 ? per_sample(-v_s, r->level, r->Te) : -1.0;
         if (q >= 0.0 && q < 1e15) {
             e = djl_floor(q);
             f = q - e;

@@ -304,12 +304,64 @@ static void run_case(tally *t, long ci)
     (void)n_end;
 }
 
+/* Found by fuzz_plan (issue 21, fourth session), every run: a stop of a motion at
+ * a_max = d_max = DBL_MIN with Te = 1e-9 s, whose d_max Te is subnormal: the stop's length
+ * came 80 samples short and its deceleration 8e-8 above d_max.  Each piece within the
+ * limits (as check_pieces of test_core), at rest at the end, with the plan's jerk times
+ * (JL, 0.08 s: 8e7 samples) and with one-sample ones. */
+static void issue21_replan_cases(void)
+{
+    static djl_plan out; /* large: off the stack */
+    djl_params p;
+    djl_error e;
+    djl_goal g;
+    djl_replan_info info;
+    djl_sample s;
+    djl_status st;
+    int32_t cur = 0;
+    int i, k, n;
+    djl_params_default(&p);
+    p.profile = DJL_PROFILE_JL;
+    p.short_stage = DJL_SHORT_OVERLAP;
+    p.Te = 1.0000000000000001e-09;
+    p.x0 = 0.1;
+    p.v0 = DBL_MIN;
+    p.v_max = 0.1;
+    p.a_max = p.d_max = DBL_MIN;
+    p.n_segments = 9;
+    for (i = 0; i < 9; i++) p.seg_distance[i] = p.seg_v_end[i] = 0.0;
+    p.seg_distance[0] = p.seg_distance[1] = DBL_MIN;
+    st = djl_plan_motion(&p, &plan, &e);
+    CHECK(st == DJL_OK, "issue 21, stop at d_max = DBL_MIN: the plan: %s", e.message);
+    if (st != DJL_OK) return;
+    for (k = 0; k < 2; k++) {
+        memset(&g, 0, sizeof g);
+        g.kind = DJL_GOAL_STOP;
+        for (i = 0; i < 4; i++) g.N[i] = k == 0 ? plan.N[i] : 1;
+        g.no_stop_first = 1;
+        st = djl_replan(&plan, 0.0, &g, &out, &scratch, &info, &e);
+        CHECK(st == DJL_OK, "issue 21, stop at d_max = DBL_MIN (N %d): %s", (int)g.N[2],
+              e.message);
+        if (st != DJL_OK) continue;
+        n = out.n_pieces;
+        for (i = 0; i < n; i++)
+            CHECK(fabs(out.piece[i].a) <= p.d_max * (1.0 + 1e-12),
+                  "issue 21, stop at d_max = DBL_MIN (N %d): piece %d: |a| = %.17g above "
+                  "d_max %.17g", (int)g.N[2], i, fabs(out.piece[i].a), p.d_max);
+        cur = 0;
+        djl_eval(&out, (double)out.k_end, &cur, &s);
+        CHECK(s.done && s.v == 0.0 && s.a == 0.0, "issue 21, stop at d_max = DBL_MIN: ends at "
+              "v %g a %g", s.v, s.a);
+    }
+}
+
 int main(int argc, char **argv)
 {
     long cases = argc > 1 ? atol(argv[1]) : 2000, c;
     tally t;
     memset(&t, 0, sizeof t);
     if (argc > 2) rng_state ^= strtoull(argv[2], NULL, 10) * 0x9E3779B97F4A7C15ULL;
+    issue21_replan_cases();
     for (c = 0; c < cases && failures <= 20; c++) {
         if (getenv("TEST_REPLAN_CASE") && c != atol(getenv("TEST_REPLAN_CASE"))) {
             /* the same random draws, quietly */

@@ -1,22 +1,25 @@
 #!/bin/sh
 # A fuzz campaign of one harness of tests/fuzz/ (docs/generator.md, "The campaign"), on
 # demand: builds the harnesses (tests/fuzz/build.sh), then runs HARNESS (fmi, state or
-# plan) under libFuzzer for SECONDS in all, in one process (fork mode restarts a process
-# per job and reloads the corpus: it ran the FMI harness at 40-100 inputs/s against 300),
-# restarting it after a finding, which is kept in $OUT/artifacts_HARNESS.  The corpus
-# grows in $OUT/corpus_HARNESS (seeded with tests/fuzz/corpus/HARNESS); each run's log is
-# kept.  At the end it prints every run's executions, time and last coverage line, the
-# total, and the findings; merge what is new into the committed corpus with
+# plan) under libFuzzer for SECONDS in all, in WORKERS processes (default 1; one per core
+# to spare) sharing one corpus, $OUT/corpus_HARNESS (seeded with tests/fuzz/corpus/HARNESS;
+# libFuzzer reloads it, so each worker picks up what the others add).  Each worker is one
+# process (fork mode restarts a process per job and reloads the corpus: it ran the FMI
+# harness at 40-100 inputs/s against 300), restarted after a finding, which is kept in
+# $OUT/artifacts_HARNESS; each run's log is kept in $OUT/logs_HARNESS.  At the end it
+# prints every run's executions, time and last coverage line, the total, and the
+# findings; merge what is new into the committed corpus with
 #
 #   $OUT/fuzz_HARNESS -merge=1 tests/fuzz/corpus/HARNESS $OUT/corpus_HARNESS
 #
-# usage: tests/fuzz/campaign.sh HARNESS SECONDS      (OUT, default /tmp/djl-fuzz)
-#        e.g. nice -n 15 tests/fuzz/campaign.sh plan 36000
+# usage: tests/fuzz/campaign.sh HARNESS SECONDS [WORKERS]     (OUT, default /tmp/djl-fuzz)
+#        e.g. nice -n 15 tests/fuzz/campaign.sh plan 36000 2
 set -eu
 cd "$(dirname "$0")/../.."
-[ $# -eq 2 ] || { echo "usage: $0 fmi|state|plan SECONDS" >&2; exit 2; }
+[ $# -eq 2 ] || [ $# -eq 3 ] || { echo "usage: $0 fmi|state|plan SECONDS [WORKERS]" >&2; exit 2; }
 H=$1
 TOTAL=$2
+WORKERS=${3:-1}
 case $H in
 fmi) LEN=1024 ;;
 state) LEN=512 ;;
@@ -26,26 +29,41 @@ esac
 case $TOTAL in
 '' | *[!0-9]*) echo "$0: SECONDS must be a whole number, got '$TOTAL'" >&2; exit 2 ;;
 esac
+case $WORKERS in
+'' | *[!0-9]* | 0) echo "$0: WORKERS must be a whole number >= 1, got '$WORKERS'" >&2; exit 2 ;;
+esac
 OUT=${OUT:-/tmp/djl-fuzz}
 export OUT
 tests/fuzz/build.sh
 mkdir -p "$OUT/corpus_$H" "$OUT/artifacts_$H" "$OUT/logs_$H"
 cp -n tests/fuzz/corpus/"$H"/* "$OUT/corpus_$H"/ 2>/dev/null || true
 start=$(date +%s)
-run=0
-while :; do
-    left=$((TOTAL - ($(date +%s) - start)))
-    [ "$left" -gt 10 ] || break
-    run=$((run + 1))
-    log="$OUT/logs_$H/run_$run.log"
-    echo "campaign $H: run $run, $left s left" >&2
-    "$OUT/fuzz_$H" -max_len=$LEN -len_control=0 -timeout=20 -rss_limit_mb=2048 \
-        -max_total_time="$left" -print_final_stats=1 -artifact_prefix="$OUT/artifacts_$H/" \
-        "$OUT/corpus_$H" > "$log" 2>&1 || true
+
+worker() { # worker number: runs until SECONDS have passed since the start
+    run=0
+    while :; do
+        left=$((TOTAL - ($(date +%s) - start)))
+        [ "$left" -gt 10 ] || break
+        run=$((run + 1))
+        log="$OUT/logs_$H/run_w$1_$run.log"
+        echo "campaign $H: worker $1, run $run, $left s left" >&2
+        "$OUT/fuzz_$H" -max_len=$LEN -len_control=0 -timeout=20 -rss_limit_mb=2048 \
+            -max_total_time="$left" -print_final_stats=1 -artifact_prefix="$OUT/artifacts_$H/" \
+            "$OUT/corpus_$H" > "$log" 2>&1 || true
+    done
+}
+
+w=1
+while [ "$w" -le "$WORKERS" ]; do
+    worker "$w" &
+    w=$((w + 1))
 done
+wait
 total=0
 for log in "$OUT/logs_$H"/run_*.log; do
     n=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")
+    # a run stopped from outside prints no final stats: its last progress line counts
+    [ -n "$n" ] || n=$(grep -E '^#[0-9]+' "$log" | tail -1 | sed 's/^#\([0-9]*\).*/\1/')
     rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log")
     last=$(grep -E '^#[0-9]+' "$log" | tail -1 | cut -c1-100)
     found=$(grep -m1 -E 'invariant broken|runtime error|ERROR: AddressSanitizer|ERROR: libFuzzer' "$log" || true)
