@@ -616,6 +616,9 @@ static void run_state_packing(void)
 }
 
 /* Targeted structural damage with a valid checksum: each is refused by name. */
+static void set_bool(fmi2Component c, fmi2ValueReference vr, int v);
+static int get_bool(fmi2Component c, fmi2ValueReference vr);
+
 static void run_forged_states(void)
 {
     fmi2Component c = ready("forged");
@@ -707,6 +710,25 @@ static void run_forged_states(void)
         expect_error(fmi2SetFMUstate(c, forged), "bad header");
     }
 #undef FORGE
+    /* issue 21, fourth session (fuzz_state): the replan count has no bound but its type's;
+     * a state holding INT64_MAX is accepted, and the next replan (a commanded target) made
+     * the count overflow (UBSan).  It now stays at INT64_MAX; the move lands. */
+    {
+        fmi2Component c2 = ready("forged_replans");
+        int i;
+        model_state_unpack(buf, &d);
+        d.replans = INT64_MAX;
+        model_state_pack(&d, forged);
+        CHECK(fmi2SetFMUstate(c2, forged) == fmi2OK, "replans = INT64_MAX: %s", last_message);
+        set_real(c2, VR_TARGET, -0.1);
+        set_bool(c2, VR_EXECUTE, 1);
+        for (i = 0; i < 3000; i++)
+            CHECK(fmi2DoStep(c2, 0.05 + i * 1e-3, 1e-3, fmi2True) == fmi2OK, "step %d: %s", i,
+                  last_message);
+        CHECK(fabs(get_real(c2, VR_X) + 0.1) < 1e-12 && get_bool(c2, VR_DONE),
+              "replans = INT64_MAX: the target -0.1 m, x = %.17g", get_real(c2, VR_X));
+        fmi2FreeInstance(c2);
+    }
     /* refusals left the instance as it was */
     still_usable(c, 0.0);
     /* from the Error state, a stored state can be restored, and Reset always works */
@@ -920,6 +942,21 @@ static void run_forged_memory(void)
     FORGE_MEM(d.mem.phase[0].rate = 0.0, "phase of f_mode is not finite or its rate");
     FORGE_MEM(d.mem.phase[0].rate = 1e-300, "phase of f_mode is not finite or its rate");
     FORGE_MEM(d.mem.phase[0].rate = 2.5, "phase of f_mode is not finite or its rate");
+    /* issue 21, fourth session (fuzz_state): f_mode itself, the input the shaper is timed
+     * by, beyond what a set accepts (f_mode = DBL_MIN froze the outputs, then a change of
+     * f_mode gave NaN after OK steps); at the bounds a set accepts, the state is accepted */
+    FORGE_MEM(d.f_mode = DBL_MIN, "the input f_mode is outside the range its shaper allows");
+    FORGE_MEM(d.f_mode = 1e-3, "the input f_mode is outside the range its shaper allows");
+    FORGE_MEM(d.f_mode = 2.5 / d.p.Te, "the input f_mode is outside the range its shaper allows");
+    model_state_unpack(buf, &d);
+    d.f_mode = 2.0 / d.p.Te;
+    model_state_pack(&d, forged);
+    CHECK(fmi2SetFMUstate(c, forged) == fmi2OK, "f_mode = 2/Te: %s", last_message);
+    model_state_unpack(buf, &d);
+    d.f_mode = d.shaper.phase_max / (DJL_MAX_SHAPER_DELAY_SAMPLES * d.p.Te);
+    model_state_pack(&d, forged);
+    CHECK(fmi2SetFMUstate(c, forged) == fmi2OK, "f_mode at the window's bound: %s",
+          last_message);
     /* a phase of f_mode in the state of a shaper timed by f_shaper */
     {
         fmi2Component c1 = make("forged memory, f_shaper");
