@@ -342,6 +342,11 @@ void djl_shaper_undo(djl_shaper_memory *mem, int64_t token);
  * periods per sample) from the first sample at or after s on. */
 void djl_shaper_phase_rate(djl_shaper_memory *mem, double s, double rate);
 
+/* Source 2: whether a phase rate (f_mode Te, periods per sample) is one an accepted
+ * f_mode gives: at most DJL_SHAPER_MAX_PHASE_RATE, and no delay of sh beyond the memory's
+ * window (DJL_MAX_SHAPER_DELAY_SAMPLES), each up to rounding.  For checking a state. */
+int djl_shaper_rate_ok(const djl_shaper *sh, double rate);
+
 /* Structure of a memory (an FMU state's): NULL if sound, else why not. */
 const char *djl_shaper_memory_flaw(const djl_shaper_memory *mem, const djl_shaper *sh);
 

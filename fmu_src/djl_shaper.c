@@ -460,6 +460,13 @@ void djl_shaper_eval(const djl_shaper *sh, const djl_plan *plan, double u, doubl
 /* ------------------------------------------------------------------------ */
 /* the structure of a memory (an FMU state's)                               */
 
+int djl_shaper_rate_ok(const djl_shaper *sh, double rate)
+{
+    return djl_isfinite(rate) && rate > 0.0 &&
+           rate >= 0.999999 * sh->phase_max / (double)DJL_MAX_SHAPER_DELAY_SAMPLES &&
+           rate <= DJL_SHAPER_MAX_PHASE_RATE * (1.0 + 1e-9);
+}
+
 const char *djl_shaper_memory_flaw(const djl_shaper_memory *m, const djl_shaper *sh)
 {
     int32_t i;
@@ -488,10 +495,7 @@ const char *djl_shaper_memory_flaw(const djl_shaper_memory *m, const djl_shaper 
             (i > 0 && (e->k <= PHASE(m, i - 1).k || !(e->P >= PHASE(m, i - 1).P))))
             return "the phase of f_mode is not in order";
         /* the rate of an f_mode accepted: no delay beyond the memory's window */
-        if (!djl_isfinite(e->P) || !(djl_isfinite(e->rate) && e->rate > 0.0 &&
-                                     e->rate >= 0.999999 * sh->phase_max /
-                                                    (double)DJL_MAX_SHAPER_DELAY_SAMPLES &&
-                                     e->rate <= DJL_SHAPER_MAX_PHASE_RATE * (1.0 + 1e-9)))
+        if (!djl_isfinite(e->P) || !djl_shaper_rate_ok(sh, e->rate))
             return "the phase of f_mode is not finite or its rate out of range";
     }
     return NULL;

@@ -1027,16 +1027,12 @@ const char *model_state_flaw(const model_data *d)
             if (d->shaper_cursor[i] < 0 || d->shaper_cursor[i] >= pl->n_pieces)
                 return "a piece cursor of the shaper is out of range";
         if ((why = djl_shaper_memory_flaw(&d->mem, &d->shaper)) != NULL) return why;
-        /* f_mode, the input such a shaper is timed by, within the bounds a set keeps it in
-         * (its phase rate at most DJL_SHAPER_MAX_PHASE_RATE a sample, no delay beyond the
-         * memory's window: the memory's rates obey the same); issue 21, fourth session,
-         * f_mode = DBL_MIN in a resealed state froze the outputs, then gave NaN */
-        if (d->shaper.n > 0 && d->shaper.source == DJL_SHAPER_SOURCE_F_MODE) {
-            double rate = d->f_mode * d->p.Te;
-            if (!(rate <= DJL_SHAPER_MAX_PHASE_RATE * (1.0 + 1e-9) &&
-                  rate >= 0.999999 * d->shaper.phase_max / (double)DJL_MAX_SHAPER_DELAY_SAMPLES))
-                return "the input f_mode is outside the range its shaper allows";
-        }
+        /* f_mode, the input such a shaper is timed by, within the bounds a set keeps it in,
+         * as the memory's rates (issue 21, fourth session: f_mode = DBL_MIN in a resealed
+         * state froze the outputs, then gave NaN) */
+        if (d->shaper.n > 0 && d->shaper.source == DJL_SHAPER_SOURCE_F_MODE &&
+            !djl_shaper_rate_ok(&d->shaper, d->f_mode * d->p.Te))
+            return "the input f_mode is outside the range its shaper allows";
     }
     /* the outputs are those of the plan (shaped) at the current sample */
     cur = d->cursor;

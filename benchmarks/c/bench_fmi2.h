@@ -13,14 +13,14 @@
 
 #include "fmi2Functions.h"
 
-static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
+static void bench_logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
                    fmi2String category, fmi2String message, ...)
 {
     (void)env;
     if (status >= fmi2Error) fprintf(stderr, "[%s] %s: %s\n", name, category, message);
 }
 
-static double now(void)
+static double bench_now(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);

@@ -7,12 +7,12 @@
  *
  * usage: bench_importer LIB GUID RESOURCE_URI VR_X VR_V VR_A VR_J TE SAMPLES REPEATS
  */
-#include "bench_fmi2.h" /* logger, now, LOAD */
+#include "bench_fmi2.h" /* bench_logger, bench_now, LOAD */
 
 int main(int argc, char **argv)
 {
     void *lib;
-    fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
+    fmi2CallbackFunctions cb = {bench_logger, calloc, free, NULL, NULL};
     fmi2ValueReference vr[4];
     double Te, out[4], sink = 0.0;
     long long n, i;
@@ -48,14 +48,14 @@ int main(int argc, char **argv)
                 fmi2EnterInitializationMode(c) != fmi2OK ||
                 fmi2ExitInitializationMode(c) != fmi2OK)
                 return 4;
-            t0 = now();
+            t0 = bench_now();
             for (i = 0; i < n; i++) {
                 if (fmi2DoStep(c, t, Te, fmi2True) != fmi2OK) return 5;
                 if (fmi2GetReal(c, vr, 4, out) != fmi2OK) return 6;
                 sink += out[0];
                 t = (double)(i + 1) * Te;
             }
-            printf("%lld %.9f\n", n, now() - t0);
+            printf("%lld %.9f\n", n, bench_now() - t0);
             fmi2FreeInstance(c);
         }
     }

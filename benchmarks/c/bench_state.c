@@ -11,12 +11,12 @@
  * usage: bench_state LIB GUID URI SHAPED VR_SHAPER VR_SHAPER_SOURCE VR_F_MODE VR_TARGET
  *                    VR_EXECUTE COUNT REPEATS
  */
-#include "bench_fmi2.h" /* logger, now, LOAD */
+#include "bench_fmi2.h" /* bench_logger, bench_now, LOAD */
 
 int main(int argc, char **argv)
 {
     void *lib;
-    fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
+    fmi2CallbackFunctions cb = {bench_logger, calloc, free, NULL, NULL};
     fmi2ValueReference vr[5];
     long long count, i;
     int r, repeats, shaped, k;
@@ -74,10 +74,10 @@ int main(int argc, char **argv)
                     return 5;
                 if (fmi2DoStep(c, t, 1e-3, fmi2True) != fmi2OK) return 5;
             }
-            t0 = now();
+            t0 = bench_now();
             for (i = 0; i < count; i++)
                 if (fmi2GetFMUstate(c, &s) != fmi2OK || fmi2SetFMUstate(c, s) != fmi2OK) return 6;
-            t1 = now();
+            t1 = bench_now();
             if (fmi2SerializedFMUstateSize(c, s, &size) != fmi2OK) return 7;
             buf = (fmi2Byte *)malloc(size);
             if (!buf) return 7;
@@ -86,7 +86,7 @@ int main(int argc, char **argv)
                     fmi2SerializeFMUstate(c, s, buf, size) != fmi2OK ||
                     fmi2DeSerializeFMUstate(c, buf, size, &s2) != fmi2OK)
                     return 8;
-            printf("%lu %.9f %.9f\n", (unsigned long)size, t1 - t0, now() - t1);
+            printf("%lu %.9f %.9f\n", (unsigned long)size, t1 - t0, bench_now() - t1);
             free(buf);
             fmi2FreeFMUstate(c, &s);
             fmi2FreeFMUstate(c, &s2);

@@ -541,6 +541,26 @@ static void horizon_sweep(void)
            refused);
 }
 
+/* The motion of fuzz_plan's DBL_MIN findings (issue 21, third and fourth sessions): JL,
+ * a_max = d_max = DBL_MIN, Te = 1e-9 s, v0 = DBL_MIN, two segments of DBL_MIN metres (then
+ * seven empty ones); T_F2 = DBL_MIN as the fuzzer drew it (JL uses T_F1 alone). */
+static void dbl_min_params(djl_params *p)
+{
+    int i;
+    djl_params_default(p);
+    p->profile = DJL_PROFILE_JL;
+    p->short_stage = DJL_SHORT_OVERLAP;
+    p->Te = 1.0000000000000001e-09;
+    p->x0 = 0.1;
+    p->v0 = DBL_MIN;
+    p->v_max = 0.1;
+    p->a_max = p->d_max = DBL_MIN;
+    p->T_F[1] = DBL_MIN;
+    p->n_segments = 9;
+    for (i = 0; i < 9; i++) p->seg_distance[i] = p->seg_v_end[i] = 0.0;
+    p->seg_distance[0] = p->seg_distance[1] = DBL_MIN;
+}
+
 static void issue21_cases(void)
 {
     djl_params p;
@@ -601,18 +621,7 @@ static void issue21_cases(void)
     /* a_max = d_max = DBL_MIN, Te = 1e-9 s, JL with DBL_MIN segments (fuzz_plan, third
      * session): the jerk of a sample is subnormal and a level came out 8e-8 above a_max;
      * such a plan is made again in scaled units */
-    djl_params_default(&p);
-    p.profile = DJL_PROFILE_JL;
-    p.short_stage = DJL_SHORT_OVERLAP;
-    p.Te = 1.0000000000000001e-09;
-    p.x0 = 0.1;
-    p.v0 = 2.2250738585072014e-308;
-    p.v_max = 0.1;
-    p.a_max = p.d_max = 2.2250738585072014e-308;
-    p.T_F[1] = 2.2250738585072014e-308;
-    p.n_segments = 9;
-    for (i = 0; i < 9; i++) p.seg_distance[i] = p.seg_v_end[i] = 0.0;
-    p.seg_distance[0] = p.seg_distance[1] = 2.2250738585072014e-308;
+    dbl_min_params(&p);
     st = djl_plan_motion(&p, &plan, &e);
     if (st == DJL_OK) {
         for (i = 0; i < plan.n_pieces; i++)

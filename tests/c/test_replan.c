@@ -307,8 +307,8 @@ static void run_case(tally *t, long ci)
 /* Found by fuzz_plan (issue 21, fourth session), every run: a stop of a motion at
  * a_max = d_max = DBL_MIN with Te = 1e-9 s, whose d_max Te is subnormal: the stop's length
  * came 80 samples short and its deceleration 8e-8 above d_max.  Each piece within the
- * limits (as check_pieces of test_core), at rest at the end, with the plan's jerk times
- * (JL, 0.08 s: 8e7 samples) and with one-sample ones. */
+ * limits, at rest at the end, with the plan's jerk times (JL, 0.08 s: 8e7 samples) and
+ * with one-sample ones. */
 static void issue21_replan_cases(void)
 {
     static djl_plan out; /* large: off the stack */
@@ -320,17 +320,7 @@ static void issue21_replan_cases(void)
     djl_status st;
     int32_t cur = 0;
     int i, k, n;
-    djl_params_default(&p);
-    p.profile = DJL_PROFILE_JL;
-    p.short_stage = DJL_SHORT_OVERLAP;
-    p.Te = 1.0000000000000001e-09;
-    p.x0 = 0.1;
-    p.v0 = DBL_MIN;
-    p.v_max = 0.1;
-    p.a_max = p.d_max = DBL_MIN;
-    p.n_segments = 9;
-    for (i = 0; i < 9; i++) p.seg_distance[i] = p.seg_v_end[i] = 0.0;
-    p.seg_distance[0] = p.seg_distance[1] = DBL_MIN;
+    dbl_min_params(&p); /* test_core.c */
     st = djl_plan_motion(&p, &plan, &e);
     CHECK(st == DJL_OK, "issue 21, stop at d_max = DBL_MIN: the plan: %s", e.message);
     if (st != DJL_OK) return;
