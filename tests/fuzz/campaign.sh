@@ -6,7 +6,8 @@
 # libFuzzer reloads it, so each worker picks up what the others add).  Each worker is one
 # process (fork mode restarts a process per job and reloads the corpus: it ran the FMI
 # harness at 40-100 inputs/s against 300), restarted after a finding, which is kept in
-# $OUT/artifacts_HARNESS; each run's log is kept in $OUT/logs_HARNESS.  At the end it
+# $OUT/artifacts_HARNESS; each run's log is kept in $OUT/logs_HARNESS/START (START the
+# campaign's start, UTC: a later campaign in the same OUT keeps its own).  At the end it
 # prints every run's executions, time and last coverage line, the total, and the
 # findings; merge what is new into the committed corpus with
 #
@@ -35,9 +36,10 @@ esac
 OUT=${OUT:-/tmp/djl-fuzz}
 export OUT
 tests/fuzz/build.sh
-mkdir -p "$OUT/corpus_$H" "$OUT/artifacts_$H" "$OUT/logs_$H"
-cp -n tests/fuzz/corpus/"$H"/* "$OUT/corpus_$H"/ 2>/dev/null || true
 start=$(date +%s)
+LOGS="$OUT/logs_$H/$(date -u -d "@$start" +%Y%m%d-%H%M%S)"
+mkdir -p "$OUT/corpus_$H" "$OUT/artifacts_$H" "$LOGS"
+cp -n tests/fuzz/corpus/"$H"/* "$OUT/corpus_$H"/ 2>/dev/null || true
 
 worker() { # worker number: runs until SECONDS have passed since the start
     run=0
@@ -45,7 +47,7 @@ worker() { # worker number: runs until SECONDS have passed since the start
         left=$((TOTAL - ($(date +%s) - start)))
         [ "$left" -gt 10 ] || break
         run=$((run + 1))
-        log="$OUT/logs_$H/run_w$1_$run.log"
+        log="$LOGS/run_w$1_$run.log"
         echo "campaign $H: worker $1, run $run, $left s left" >&2
         "$OUT/fuzz_$H" -max_len=$LEN -len_control=0 -timeout=20 -rss_limit_mb=2048 \
             -max_total_time="$left" -print_final_stats=1 -artifact_prefix="$OUT/artifacts_$H/" \
@@ -60,7 +62,7 @@ while [ "$w" -le "$WORKERS" ]; do
 done
 wait
 total=0
-for log in "$OUT/logs_$H"/run_*.log; do
+for log in "$LOGS"/run_*.log; do
     n=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")
     # a run stopped from outside prints no final stats: its last progress line counts
     [ -n "$n" ] || n=$(grep -E '^#[0-9]+' "$log" | tail -1 | sed 's/^#\([0-9]*\).*/\1/')
@@ -70,5 +72,5 @@ for log in "$OUT/logs_$H"/run_*.log; do
     echo "$(basename "$log"): ${n:-?} executions, ${rate:-?}/s; $last${found:+; FOUND: $found}"
     total=$((total + ${n:-0}))
 done
-echo "campaign $H: $total executions in $(($(date +%s) - start)) s; findings in $OUT/artifacts_$H:"
+echo "campaign $H: $total executions in $(($(date +%s) - start)) s; logs in $LOGS; findings in $OUT/artifacts_$H:"
 ls "$OUT/artifacts_$H"
