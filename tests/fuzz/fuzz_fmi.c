@@ -30,6 +30,8 @@
 #include "fmu_instance.h"
 #include "fuzz_common.h"
 
+#include <stdarg.h>
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 /* ------------------------------------------------------------------ the two layers */
@@ -43,6 +45,22 @@ typedef struct {
 
 static char last_msg[512]; /* the FMU's last log message, for a broken invariant's report */
 
+/* With FUZZ_VERBOSE set, each call the harness makes (with its arguments) and each message
+ * the FMU logs go to stderr: the sequence an input decodes to, to read a finding (with the
+ * gcc replay build, as tests/test_fuzz_corpus.py builds it). */
+static int verbose = -1;
+
+static void trace(const char *fmt, ...)
+{
+    va_list ap;
+    if (verbose < 0) verbose = getenv("FUZZ_VERBOSE") != NULL;
+    if (!verbose) return;
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+}
+
 static void log2_cb(fmi2ComponentEnvironment e, fmi2String n, fmi2Status s, fmi2String c,
                     fmi2String m, ...)
 {
@@ -52,6 +70,7 @@ static void log2_cb(fmi2ComponentEnvironment e, fmi2String n, fmi2Status s, fmi2
     (void)c;
     FUZZ_CHECK(m != NULL && strlen(m) < 4096, "log message");
     strncpy(last_msg, m, sizeof last_msg - 1);
+    trace("  log: %s", m);
 }
 
 static void log3_cb(fmi3InstanceEnvironment e, fmi3Status s, fmi3String c, fmi3String m)
@@ -61,12 +80,14 @@ static void log3_cb(fmi3InstanceEnvironment e, fmi3Status s, fmi3String c, fmi3S
     (void)c;
     FUZZ_CHECK(m != NULL && strlen(m) < 4096, "log message");
     strncpy(last_msg, m, sizeof last_msg - 1);
+    trace("  log: %s", m);
 }
 
 static const fmi2CallbackFunctions cb2 = {log2_cb, calloc, free, NULL, NULL};
 
 static int instantiate(fmu *f, int logging)
 {
+    trace("instantiate (FMI %d, logging %d)", f->v3 ? 3 : 2, logging);
     if (f->v3) {
         f->c3 = fmi3InstantiateCoSimulation("fuzz", DJL_INSTANTIATION_TOKEN, "/tmp", fmi3False,
                                             logging ? fmi3True : fmi3False, fmi3False, fmi3False,
@@ -90,6 +111,7 @@ static void free_states(fmu *f)
 
 static void free_instance(fmu *f)
 {
+    trace("free instance");
     free_states(f);
     if (f->v3) fmi3FreeInstance(f->c3);
     else fmi2FreeInstance(f->c2);
@@ -106,6 +128,7 @@ static int get_real(fmu *f, unsigned vr, double *v)
 
 static int set_real(fmu *f, unsigned vr, double v)
 {
+    trace("set real %u = %.17g", vr, v);
     if (f->v3) return (int)fmi3SetFloat64(f->c3, &vr, 1, &v, 1);
     return (int)fmi2SetReal(f->c2, &vr, 1, &v);
 }
@@ -133,6 +156,7 @@ static int get_int(fmu *f, unsigned vr, long long *v)
 
 static int set_int(fmu *f, unsigned vr, long long v, int as64)
 {
+    trace("set integer %u = %lld", vr, v);
     if (f->v3) {
         if (as64) {
             fmi3Int64 x = v;
@@ -164,6 +188,7 @@ static int get_bool(fmu *f, unsigned vr, int *v)
 
 static int set_bool(fmu *f, unsigned vr, int v)
 {
+    trace("set boolean %u = %d", vr, v);
     if (f->v3) {
         fmi3Boolean b = v ? fmi3True : fmi3False;
         return (int)fmi3SetBoolean(f->c3, &vr, 1, &b, 1);
@@ -175,6 +200,7 @@ static int set_bool(fmu *f, unsigned vr, int v)
 
 static int enter_init(fmu *f, double t0)
 {
+    trace("enter initialisation (start time %.17g)", t0);
     if (f->v3) return (int)fmi3EnterInitializationMode(f->c3, fmi3False, 0.0, t0, fmi3False, 0.0);
     if (fmi2SetupExperiment(f->c2, fmi2False, 0.0, t0, fmi2False, 0.0) != fmi2OK) return 3;
     return (int)fmi2EnterInitializationMode(f->c2);
@@ -182,12 +208,14 @@ static int enter_init(fmu *f, double t0)
 
 static int exit_init(fmu *f)
 {
+    trace("exit initialisation");
     if (f->v3) return (int)fmi3ExitInitializationMode(f->c3);
     return (int)fmi2ExitInitializationMode(f->c2);
 }
 
 static int do_step(fmu *f, double t, double h)
 {
+    trace("step from %.17g by %.17g", t, h);
     if (f->v3) {
         fmi3Boolean eh = fmi3True, term = fmi3True, early = fmi3True;
         fmi3Float64 last = NAN;
@@ -200,24 +228,28 @@ static int do_step(fmu *f, double t, double h)
 
 static int reset(fmu *f)
 {
+    trace("reset");
     if (f->v3) return (int)fmi3Reset(f->c3);
     return (int)fmi2Reset(f->c2);
 }
 
 static int terminate(fmu *f)
 {
+    trace("terminate");
     if (f->v3) return (int)fmi3Terminate(f->c3);
     return (int)fmi2Terminate(f->c2);
 }
 
 static int get_state(fmu *f, int slot)
 {
+    trace("get state into slot %d", slot);
     if (f->v3) return (int)fmi3GetFMUState(f->c3, (fmi3FMUState *)&f->state[slot]);
     return (int)fmi2GetFMUstate(f->c2, (fmi2FMUstate *)&f->state[slot]);
 }
 
 static int set_state(fmu *f, int slot)
 {
+    trace("set state of slot %d", slot);
     if (f->v3) return (int)fmi3SetFMUState(f->c3, (fmi3FMUState)f->state[slot]);
     return (int)fmi2SetFMUstate(f->c2, (fmi2FMUstate)f->state[slot]);
 }
@@ -226,6 +258,7 @@ static int set_state(fmu *f, int slot)
 static int serialize(fmu *f, int slot, unsigned char *buf, size_t n, size_t *size)
 {
     int st;
+    trace("serialise slot %d", slot);
     *size = 0;
     if (f->v3) st = (int)fmi3SerializedFMUStateSize(f->c3, (fmi3FMUState)f->state[slot], size);
     else st = (int)fmi2SerializedFMUstateSize(f->c2, (fmi2FMUstate)f->state[slot], size);
@@ -240,6 +273,7 @@ static int serialize(fmu *f, int slot, unsigned char *buf, size_t n, size_t *siz
 
 static int deserialize(fmu *f, int slot, const unsigned char *buf, size_t n)
 {
+    trace("deserialise %lu bytes into slot %d", (unsigned long)n, slot);
     if (f->v3)
         return (int)fmi3DeserializeFMUState(f->c3, buf, n, (fmi3FMUState *)&f->state[slot]);
     return (int)fmi2DeSerializeFMUstate(f->c2, (const fmi2Byte *)buf, n, (fmi2FMUstate *)&f->state[slot]);
@@ -248,6 +282,7 @@ static int deserialize(fmu *f, int slot, const unsigned char *buf, size_t n)
 static int debug_logging(fmu *f, int on)
 {
     static const char *cats[2] = {"logEvents", "logStatusError"};
+    trace("debug logging %d", on);
     if (f->v3) return (int)fmi3SetDebugLogging(f->c3, on ? fmi3True : fmi3False, 2, cats);
     return (int)fmi2SetDebugLogging(f->c2, on ? fmi2True : fmi2False, 2, cats);
 }
