@@ -40,12 +40,8 @@ def _sanitizers_work(tmp: Path) -> bool:
     return proc.returncode == 0 and subprocess.run([str(tmp / "probe")]).returncode == 0
 
 
-@pytest.mark.parametrize("name", sorted(HARNESSES))
-def test_fuzz_corpus_replays_clean(name: str, tmp_path: Path) -> None:
-    if shutil.which("gcc") is None:
-        pytest.skip("gcc not available")
-    files = sorted(p for p in (FUZZ / "corpus" / name).iterdir() if p.is_file())
-    assert len(files) >= 5, "the corpus is committed"
+def _build_replay(name: str, tmp_path: Path) -> Path:
+    """The gcc replay of harness fuzz_<name>.c (under ASan + UBSan where gcc has them)."""
     san = SAN if _sanitizers_work(tmp_path) else []
     exe = tmp_path / f"replay_{name}"
     cmd = ["gcc", *BASE, *san, f"-I{fmu_src_dir()}", f"-I{fmi_include_dir()}",
@@ -53,6 +49,16 @@ def test_fuzz_corpus_replays_clean(name: str, tmp_path: Path) -> None:
            *[str(fmu_src_dir() / s) for s in HARNESSES[name]], "-o", str(exe), "-lm"]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
+    return exe
+
+
+@pytest.mark.parametrize("name", sorted(HARNESSES))
+def test_fuzz_corpus_replays_clean(name: str, tmp_path: Path) -> None:
+    if shutil.which("gcc") is None:
+        pytest.skip("gcc not available")
+    files = sorted(p for p in (FUZZ / "corpus" / name).iterdir() if p.is_file())
+    assert len(files) >= 5, "the corpus is committed"
+    exe = _build_replay(name, tmp_path)
     proc = subprocess.run([str(exe), *map(str, files)], capture_output=True, text=True,
                           timeout=600, env={"ASAN_OPTIONS": "detect_leaks=1",
                                             "UBSAN_OPTIONS": "print_stacktrace=1"})
@@ -81,3 +87,23 @@ def test_replay_driver_fails_on_a_broken_invariant(tmp_path: Path) -> None:
     assert subprocess.run([str(exe), str(good)], capture_output=True).returncode == 0
     proc = subprocess.run([str(exe), str(good), str(bad)], capture_output=True, text=True)
     assert proc.returncode != 0 and "fuzz invariant broken" in proc.stderr
+
+
+def test_open_findings_still_break_the_fmi_harness(tmp_path: Path) -> None:
+    """tests/fuzz/open/ holds FMI inputs whose finding is not fixed yet (docs/generator.md,
+    "Open finding"): each still breaks an invariant, and FUZZ_VERBOSE traces the calls it
+    decodes to.  When this fails because an input passes, the finding is fixed: move the
+    input into corpus/fmi with its regression test."""
+    if shutil.which("gcc") is None:
+        pytest.skip("gcc not available")
+    files = sorted(p for p in (FUZZ / "open").iterdir() if p.name.startswith("crash-"))
+    if not files:
+        pytest.skip("no open finding")
+    exe = _build_replay("fmi", tmp_path)
+    for f in files:
+        proc = subprocess.run([str(exe), str(f)], capture_output=True, text=True, timeout=60,
+                              env={"FUZZ_VERBOSE": "1", "ASAN_OPTIONS": "detect_leaks=0"})
+        assert proc.returncode != 0 and "fuzz invariant broken" in proc.stderr, (
+            f"{f.name} no longer breaks an invariant: fixed? {proc.stderr[-2000:]}")
+        assert "instantiate (FMI " in proc.stderr and "step from " in proc.stderr, (
+            proc.stderr[-2000:])

@@ -37,7 +37,7 @@ OUT=${OUT:-/tmp/djl-fuzz}
 export OUT
 tests/fuzz/build.sh
 start=$(date +%s)
-LOGS="$OUT/logs_$H/$(date -u -d "@$start" +%Y%m%d-%H%M%S)"
+LOGS="$OUT/logs_$H/$(date -u +%Y%m%d-%H%M%S)"
 mkdir -p "$OUT/corpus_$H" "$OUT/artifacts_$H" "$LOGS"
 cp -n tests/fuzz/corpus/"$H"/* "$OUT/corpus_$H"/ 2>/dev/null || true
 
