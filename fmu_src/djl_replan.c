@@ -91,8 +91,23 @@ static void gather(const djl_plan *old, double u, replan_state *r)
         }
     }
     /* a rounding residue of +A - A is no acceleration (relative to the levels summed, not
-     * to a_max + d_max: limits of 10^300 the motion never reaches would zero any level) */
+     * to a_max + d_max: limits of 10^300 the motion never reaches would zero any level);
+     * nor in the part that has settled, which becomes the new plan's level0: kept, such a
+     * residue (6.9e-18 m/s2 after steps of 20 m/s2) outlived the steps it came from, and
+     * the FMU's check of its own state (AL level and acceleration those of level0 and the
+     * steps, to a billionth of what the plan holds) refused it (issue 21) */
     if (djl_fabs(r->level) <= 1e-13 * amag) r->level = 0.0;
+    if (djl_fabs(r->settled) <= 1e-13 * amag) r->settled = 0.0;
+    /* the output's acceleration at o from the steps (level0, then the ramps running, as
+     * the new plan lists them and as the FMU's state check sums them), not from the old
+     * plan's pieces: those carry their walk's rounding, relative to accelerations the new
+     * plan may no longer hold (issue 21: 7.3242e-28 against 7.3271e-28 m/s2 after a stop
+     * at d_max = 7.3e-28 m/s2, and the FMU refused its own state) */
+    r->a = r->settled;
+    for (i = 0; i < r->n_run; i++) {
+        double w = (double)(-r->run[i].tau);
+        r->a += r->run[i].A * (w / (double)r->run[i].N);
+    }
     /* the stage in progress: planned motions never reverse within a stage, so the
      * signs of the level and of the velocity tell an acceleration from a deceleration */
     r->speeding_up = r->level * r->v >= 0.0;

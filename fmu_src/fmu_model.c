@@ -879,6 +879,93 @@ static int same_sample(const djl_sample *a, const djl_sample *b)
            a->segment == b->segment && a->stage == b->stage;
 }
 
+/* A plan is one motion, and a replan reads all of it: the AL level at o from level0 and
+ * the steps listed, the output at o from the pieces (djl_replan.c, gather).  So each
+ * piece must continue the one before (x and v, to rounding), its AL level, acceleration
+ * and jerk must be those of level0 and the steps (a_al = level0 + the steps at or before
+ * k; a = level0 + each step times its ramp's progress at k; j = the ramps running over
+ * the piece, A / (N Te) each), the last piece must cruise (a = j = 0: it runs for ever)
+ * and no piece's velocity may peak above vlim between its ends (where a crosses 0).  The
+ * AL profile's x_al and v_al are not continuous: a new motion after a replan starts its
+ * AL profile at the output's velocity, and with jerk times that differ between stages
+ * the two differ by A (N1 - N2) Te / 2.  Issue 21, FMI run 11: a state with level0
+ * forged from 0 to 0.56 m/s2, its pieces untouched, passed every check of a value
+ * against its limit; a stop replanned from it then ended a stage that was not running
+ * and its output reached 1.013 v_max.  The tolerances are a billionth of what the plan
+ * itself holds (its levels, steps, speeds and positions), never of a limit it does not
+ * reach: rounding is far below it (the walks carry it over at most DJL_MAX_PIECES
+ * pieces), and a forged change that small moves nothing by more than the outputs' own
+ * rounding. */
+const char *model_plan_inconsistency(const djl_plan *pl, double vlim)
+{
+    const double rel = 1e-9, tiny = 64.0 * 4.9406564584124654e-324, Te = pl->p.Te;
+    double amag = djl_fabs(pl->level0), jmag = 0.0, vmag = 0.0, xmag = 0.0, sv, sx;
+    int32_t i, q;
+    for (q = 0; q < pl->n_steps; q++) {
+        amag += djl_fabs(pl->step[q].A);
+        if (pl->step[q].N > 0) jmag += djl_fabs(pl->step[q].A) / ((double)pl->step[q].N * Te);
+    }
+    for (i = 0; i < pl->n_pieces; i++) {
+        const djl_piece *pc = &pl->piece[i];
+        amag = djl_fmax(amag, djl_fmax(djl_fabs(pc->a), djl_fabs(pc->a_al)));
+        jmag = djl_fmax(jmag, djl_fabs(pc->j));
+        vmag = djl_fmax(vmag, djl_fabs(pc->v));
+        xmag = djl_fmax(xmag, djl_fabs(pc->x));
+    }
+    sv = vmag;
+    sx = xmag;
+    for (i = 0; i < pl->n_pieces; i++) {
+        const djl_piece *pc = &pl->piece[i];
+        double k = (double)pc->k, level = pl->level0, a = pl->level0, j = 0.0;
+        for (q = 0; q < pl->n_steps; q++) {
+            const djl_step *st = &pl->step[q];
+            double u = k - (double)st->tau;
+            if (u < 0.0) continue;
+            level += st->A;
+            if (st->N == 0 || u >= (double)st->N) {
+                a += st->A;
+            } else {
+                a += st->A * (u / (double)st->N);
+                j += st->A / ((double)st->N * Te);
+            }
+        }
+        if (!(djl_fabs(pc->a_al - level) <= rel * amag + tiny))
+            return "a piece's AL acceleration is not that of the plan's steps";
+        if (!(djl_fabs(pc->a - a) <= rel * amag + tiny))
+            return "a piece's acceleration is not that of the plan's steps";
+        if (!(djl_fabs(pc->j - j) <= rel * jmag + tiny))
+            return "a piece's jerk is not that of the plan's steps";
+        if (i + 1 == pl->n_pieces) {
+            if (pc->a != 0.0 || pc->j != 0.0) return "the plan's last piece does not cruise";
+        } else {
+            const djl_piece *nx = &pl->piece[i + 1];
+            double L = ((double)nx->k - k) * Te;
+            double dv = L * (pc->a + 0.5 * L * pc->j);
+            double dx = L * (pc->v + L * (0.5 * pc->a + L * pc->j / 6.0));
+            /* rounding carried from piece to piece: what the walk has summed so far (an
+             * acceleration's residue of 6e-33 m/s2 over a stop of 1e9 s at d_max = 7e-26
+             * m/s2 leaves 6e-24 m/s at rest, which the last piece sets to 0) */
+            sv += L * (amag + 0.5 * L * jmag);
+            sx += L * (vmag + L * (0.5 * amag + L * jmag / 6.0));
+            /* pieces of 1e154 s and more (Te beyond 1e139 s): L * L overflows, and times a
+             * magnitude of 0 gives NaN; no bound then (the values are within their limits) */
+            if (!(sv >= 0.0)) sv = DJL_HUGE_VAL;
+            if (!(sx >= 0.0)) sx = DJL_HUGE_VAL;
+            if (!(djl_fabs(pc->v + dv - nx->v) <= rel * sv + tiny) ||
+                !(djl_fabs(pc->x + dx - nx->x) <= rel * sx + tiny))
+                return "a piece of the plan does not continue the one before";
+            if (pc->j != 0.0) {
+                /* the velocity's extremum inside the piece, where a crosses 0 */
+                double ts = -pc->a / pc->j;
+                if (ts > 0.0 && ts < L &&
+                    !(djl_fabs(pc->v + ts * (pc->a + 0.5 * ts * pc->j)) <= vlim))
+                    return "a piece of the plan peaks above v_max";
+            }
+        }
+    }
+    return NULL;
+}
+
 const char *model_state_flaw(const model_data *d)
 {
     const djl_plan *pl = &d->plan;
@@ -886,6 +973,7 @@ const char *model_state_flaw(const model_data *d)
     djl_sample o;
     double amx, alim, vlim, valim, jlim, lmax = 0.0;
     int32_t nmin, nmax;
+    const char *why;
     if (d->planned != 0 && d->planned != 1) return "the planned flag is neither 0 nor 1";
     if (!djl_isfinite(d->start_time)) return "the start time is not finite";
     if (d->n < 0 || d->n > DJL_MAX_MOTION_SAMPLES) return "the sample counter is out of range";
@@ -1015,10 +1103,10 @@ const char *model_state_flaw(const model_data *d)
               djl_fabs(pc->j) <= jlim))
             return "a piece of the plan is outside the limits";
     }
+    if ((why = model_plan_inconsistency(pl, vlim)) != NULL) return why;
     /* the shaper is the one of its parameters, its memory sound */
     {
         djl_shaper sh;
-        const char *why;
         if (djl_shaper_design(&d->sp, d->p.Te, d->shaper.f_design, &sh, NULL) != DJL_OK)
             return "its shaper's parameters are invalid";
         if (memcmp(&sh, &d->shaper, sizeof sh) != 0)

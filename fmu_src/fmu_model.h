@@ -31,6 +31,9 @@ void model_defaults(model_data *d);
 /* Structure of the model's part of a state whose header, checksum and state
  * machine value were checked: NULL if sound, else why not. */
 const char *model_state_flaw(const model_data *d);
+/* Its part on the plan's consistency (pieces continuous, pieces and steps one motion, the
+ * last piece cruising, no velocity peak above vlim inside a piece): NULL, or why not. */
+const char *model_plan_inconsistency(const djl_plan *pl, double vlim);
 
 /* At the end of initialisation: plan (if the parameters changed since) and
  * start counting the inputs' edges from here. */

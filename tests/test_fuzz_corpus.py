@@ -96,7 +96,7 @@ def test_open_findings_still_break_the_fmi_harness(tmp_path: Path) -> None:
     input into corpus/fmi with its regression test."""
     if shutil.which("gcc") is None:
         pytest.skip("gcc not available")
-    files = sorted(p for p in (FUZZ / "open").iterdir() if p.name.startswith("crash-"))
+    files = sorted((FUZZ / "open").glob("crash-*"))
     if not files:
         pytest.skip("no open finding")
     exe = _build_replay("fmi", tmp_path)

@@ -1348,6 +1348,162 @@ static void run_issue21_long_stops(void)
     }
 }
 
+/* Issue 21, FMI run 11 (tests/fuzz/corpus/fmi/crash-36b2..., -44f5..., -c866...): a state
+ * whose plan.level0 was forged from 0 to 0.56 m/s2 and resealed passed every check of a
+ * value against its limit; a stop replanned from it ended a stage that was not running,
+ * and an OK step then output v = -1.0129 m/s with v_max = 1 m/s.  The scenario: jerk_source
+ * 3, a ZV shaper at 12 Hz, the 0.3 m move done, a target of -0.2 m executed at 40.671 s,
+ * a stop at 40.8614375 s.  Its true state is accepted and the stop stays within the
+ * limits; the forged one, and any one value of the plan changed within its limits, is
+ * refused for what no longer agrees. */
+static void run_issue21_forged_plan(void)
+{
+    static const double h[5] = {0.0024375, 0.086, 0.008, 0.086, 0.008};
+    static model_data d;
+    fmi2ValueReference vjs = VR_JERK_SOURCE, vsh = VR_SHAPER;
+    fmi2Integer three = 3, zv = SHAPER_ZV;
+    fmi2Component c = make("issue21-forged-plan");
+    fmi2FMUstate s = NULL, s2 = NULL;
+    fmi2Byte *buf, *forged;
+    size_t size = 0;
+    double t = 40.671, vpeak = 0.0, apeak = 0.0;
+    int i, q, piece;
+    CHECK(fmi2SetInteger(c, &vjs, 1, &three) == fmi2OK, "jerk_source");
+    CHECK(fmi2SetInteger(c, &vsh, 1, &zv) == fmi2OK, "shaper");
+    set_real(c, VR_DISTANCE, 0.3);
+    set_real(c, VR_F_SHAPER, 12.0);
+    CHECK(fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) == fmi2OK,
+          "init: %s", last_message);
+    CHECK(fmi2DoStep(c, 0.0, t, fmi2True) == fmi2OK, "the move: %s", last_message);
+    set_real(c, VR_TARGET, -0.2);
+    set_bool(c, VR_EXECUTE, 1);
+    for (i = 0; i < 5; t += h[i], i++)
+        CHECK(fmi2DoStep(c, t, h[i], fmi2True) == fmi2OK, "step %d: %s", i, last_message);
+    set_bool(c, VR_STOP, 1);
+    CHECK(fmi2GetFMUstate(c, &s) == fmi2OK, "get state: %s", last_message);
+    CHECK(fmi2SerializedFMUstateSize(c, s, &size) == fmi2OK, "size");
+    buf = (fmi2Byte *)malloc(size);
+    forged = (fmi2Byte *)malloc(model_state_max_size());
+    CHECK(buf != NULL && forged != NULL, "malloc");
+    CHECK(fmi2SerializeFMUstate(c, s, buf, size) == fmi2OK, "serialise: %s", last_message);
+    CHECK(fmi2DeSerializeFMUstate(c, buf, size, &s2) == fmi2OK, "its own state: %s",
+          last_message);
+    model_state_unpack(buf, &d);
+    CHECK(d.plan.replanned == 1 && d.plan.level0 == 0.0, "the plan of the finding: replanned "
+          "%d, level0 %.17g", (int)d.plan.replanned, d.plan.level0);
+    /* the forged state of the finding, and values of the plan changed within their limits */
+#define FORGE(stmt, fragment)                                                                     \
+    do {                                                                                         \
+        model_state_unpack(buf, &d);                                                             \
+        stmt;                                                                                    \
+        model_state_pack(&d, forged);                                                            \
+        expect_error(fmi2DeSerializeFMUstate(c, forged, model_state_size(&d), &s2), fragment);   \
+        expect_error(fmi2SetFMUstate(c, forged), fragment);                                      \
+    } while (0)
+    FORGE(d.plan.level0 = 0.56, "AL acceleration is not that of the plan's steps");
+    FORGE(d.plan.level0 = -1e-3, "AL acceleration is not that of the plan's steps");
+    for (q = 0; q < d.plan.n_steps && d.plan.step[q].N == 0; q++) continue;
+    CHECK(q < d.plan.n_steps, "a ramp in the plan");
+    FORGE(d.plan.step[q].A *= 1.01, "not that of the plan's steps");
+    FORGE(d.plan.step[q].tau += 1, "not that of the plan's steps");
+    FORGE(d.plan.step[q].N += 1, "jerk is not that of the plan's steps");
+    for (piece = 1; piece + 1 < d.plan.n_pieces && d.plan.piece[piece].j == 0.0; piece++) continue;
+    CHECK(piece + 1 < d.plan.n_pieces, "a ramp's piece inside the plan");
+    FORGE(d.plan.piece[piece].a += 0.01, "acceleration is not that of the plan's steps");
+    FORGE(d.plan.piece[piece].a_al += 0.01, "AL acceleration is not that of the plan's steps");
+    FORGE(d.plan.piece[piece].j *= 1.001, "jerk is not that of the plan's steps");
+    FORGE(d.plan.piece[piece].v += 1e-6, "does not continue the one before");
+    FORGE(d.plan.piece[piece].x += 1e-9, "does not continue the one before");
+    FORGE(d.plan.piece[piece].k += 1, "acceleration is not that of the plan's steps");
+#undef FORGE
+    /* nothing refused changed the instance: its true state stops within the limits */
+    CHECK(fmi2SetFMUstate(c, s2) == fmi2OK, "set its own state: %s", last_message);
+    for (i = 0; i < 2000 && !get_bool(c, VR_DONE); i++, t += 5e-4) {
+        CHECK(fmi2DoStep(c, t, 5e-4, fmi2True) == fmi2OK, "stop, step %d: %s", i, last_message);
+        vpeak = fmax(vpeak, fabs(get_real(c, VR_V)));
+        apeak = fmax(apeak, fabs(get_real(c, VR_A)));
+    }
+    CHECK(get_bool(c, VR_DONE) && get_real(c, VR_V) == 0.0, "the stop comes to rest: v %.17g",
+          get_real(c, VR_V));
+    CHECK(vpeak <= 1.0 && vpeak > 0.9, "the stop's peak velocity %.17g m/s, v_max 1 m/s", vpeak);
+    CHECK(apeak <= 10.0, "the stop's peak acceleration %.17g m/s2, a_max 10 m/s2", apeak);
+    free(buf);
+    free(forged);
+    fmi2FreeFMUstate(c, &s);
+    fmi2FreeFMUstate(c, &s2);
+    fmi2FreeInstance(c);
+}
+
+/* The plan check on plans built here, independently of the planner: ramps of a moving
+ * average (each step A over N samples adds A / (N Te) of jerk while it runs), the pieces
+ * walked by Taylor polynomials from v0.  A plan that peaks inside a piece and one whose
+ * steps do not come back to rest are refused; the same plans made sound are accepted. */
+static void synthetic_plan(djl_plan *pl, double v0, int rest)
+{
+    /* Te = 1 s: +1 over 4 samples, -3 over 4 from 4 (a crosses 0 inside [4, 8), at 16/3),
+     * +2 over 4 from 8: back to a = 0 at 12 */
+    static const int64_t tau[3] = {0, 4, 8};
+    static const double A[3] = {1.0, -3.0, 2.0};
+    double x = 0.0, v = v0;
+    int i, q;
+    memset(pl, 0, sizeof *pl);
+    pl->p.Te = 1.0;
+    pl->n_steps = rest ? 3 : 1;
+    for (q = 0; q < pl->n_steps; q++) {
+        pl->step[q].tau = tau[q];
+        pl->step[q].A = A[q];
+        pl->step[q].N = 4;
+        pl->step[q].stage = 1 + q;
+    }
+    pl->n_pieces = rest ? 4 : 2;
+    for (i = 0; i < pl->n_pieces; i++) {
+        djl_piece *pc = &pl->piece[i];
+        double a = 0.0, j = 0.0, level = 0.0;
+        pc->k = 4 * i;
+        for (q = 0; q < pl->n_steps; q++)
+            if (pc->k >= tau[q]) {
+                level += A[q];
+                if (pc->k < tau[q] + 4) {
+                    a += A[q] * (double)(pc->k - tau[q]) / 4.0;
+                    j += A[q] / 4.0;
+                } else {
+                    a += A[q];
+                }
+            }
+        pc->x = x;
+        pc->v = v;
+        pc->a = a;
+        pc->j = j;
+        pc->a_al = level;
+        x += 4.0 * v + 8.0 * a + 64.0 * j / 6.0;
+        v += 4.0 * a + 8.0 * j;
+    }
+}
+
+static void run_plan_consistency(void)
+{
+    static djl_plan pl;
+    const char *why;
+    /* v: 2.5 at 0, 4.5 at 4, peak 4.5 + 2/3 at 16/3, 2.5 at 8, -1.5 at 12 */
+    synthetic_plan(&pl, 2.5, 1);
+    why = model_plan_inconsistency(&pl, 5.0);
+    CHECK(why != NULL && strstr(why, "peaks above v_max") != NULL,
+          "a peak of 5.1667 m/s inside a piece, v_max 5: %s", why ? why : "accepted");
+    CHECK(fabs(pl.piece[2].v - 2.5) < 1e-12 && fabs(pl.piece[3].v + 1.5) < 1e-12,
+          "the synthetic plan's velocities %.17g %.17g", pl.piece[2].v, pl.piece[3].v);
+    why = model_plan_inconsistency(&pl, 5.2);
+    CHECK(why == NULL, "the same plan with v_max 5.2: %s", why);
+    synthetic_plan(&pl, 0.0, 0);
+    why = model_plan_inconsistency(&pl, 5.0);
+    CHECK(why != NULL && strstr(why, "last piece does not cruise") != NULL,
+          "a plan that ends accelerating at 1 m/s2: %s", why ? why : "accepted");
+    synthetic_plan(&pl, 2.5, 1);
+    pl.piece[3].x += 1e-6;
+    why = model_plan_inconsistency(&pl, 5.2);
+    CHECK(why != NULL && strstr(why, "does not continue") != NULL, "x off by 1e-6: %s",
+          why ? why : "accepted");
+}
+
 int main(int argc, char **argv)
 {
     /* argv[1]: corruptions of a serialized state (10^6 for the full campaign of
@@ -1369,6 +1525,8 @@ int main(int argc, char **argv)
     run_commands(3);
     run_issue21_landing();
     run_issue21_long_stops();
+    run_issue21_forged_plan();
+    run_plan_consistency();
     run_entry_points();
     run_state_fuzz(n_fuzz, n_sealed);
     printf("fmi2: %d failures, %d errors logged\n", failures, errors_logged);

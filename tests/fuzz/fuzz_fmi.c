@@ -363,6 +363,7 @@ static void check_step(fmu *f, follow *w)
     long long shaper = 0, n = 0;
     int i;
     read_outputs(f, &o);
+    trace("  -> x %.17g, v %.17g, a %.17g, done %d", o.x, o.v, o.a, o.done);
     if (!w->stepping) return;
     FUZZ_CHECK(o.done == !o.busy, "done %d busy %d", o.done, o.busy);
     (void)get_int(f, VR_SHAPER, &shaper);
