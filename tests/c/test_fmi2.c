@@ -58,6 +58,18 @@ static void expect_error(fmi2Status st, const char *fragment)
           fragment);
 }
 
+/* A state forged from the serialised state buf: unpacked into d, changed by stmt, packed and
+ * resealed into forged; deserialising and setting it must both be refused, naming fragment.
+ * Uses the caller's c, buf, d, forged and s2. */
+#define FORGE(stmt, fragment)                                                                     \
+    do {                                                                                         \
+        model_state_unpack(buf, &d);                                                             \
+        stmt;                                                                                    \
+        model_state_pack(&d, forged);                                                            \
+        expect_error(fmi2DeSerializeFMUstate(c, forged, model_state_size(&d), &s2), fragment);   \
+        expect_error(fmi2SetFMUstate(c, forged), fragment);                                      \
+    } while (0)
+
 static void run_states(void)
 {
     fmi2Component c = make("states");
@@ -634,14 +646,6 @@ static void run_forged_states(void)
     buf = (fmi2Byte *)malloc(size);
     forged = (fmi2Byte *)malloc(model_state_max_size());
     fmi2SerializeFMUstate(c, s, buf, size);
-#define FORGE(stmt, fragment)                                                                     \
-    do {                                                                                         \
-        model_state_unpack(buf, &d);                                                             \
-        stmt;                                                                                    \
-        model_state_pack(&d, forged);                                                            \
-        expect_error(fmi2DeSerializeFMUstate(c, forged, model_state_size(&d), &s2), fragment);   \
-        expect_error(fmi2SetFMUstate(c, forged), fragment);                                      \
-    } while (0)
     FORGE(d.state = 64, "state machine value 64");
     FORGE(d.state = MS_ERROR, "state machine value 32");
     FORGE(d.planned = 2, "planned flag");
@@ -709,7 +713,6 @@ static void run_forged_states(void)
         expect_error(fmi2DeSerializeFMUstate(c, forged, size, &s2), "bad header");
         expect_error(fmi2SetFMUstate(c, forged), "bad header");
     }
-#undef FORGE
     /* issue 21, fourth session (fuzz_state): the replan count has no bound but its type's;
      * a state holding INT64_MAX is accepted, and the next replan (a commanded target) made
      * the count overflow (UBSan).  It now stays at INT64_MAX; the move lands. */
@@ -922,32 +925,24 @@ static void run_forged_memory(void)
           (int)d.mem.n_past, (int)d.mem.n_phase);
     /* the state as it is: accepted */
     CHECK(fmi2DeSerializeFMUstate(c, buf, size, &s2) == fmi2OK, "deserialize: %s", last_message);
-#define FORGE_MEM(stmt, fragment)                                                                 \
-    do {                                                                                         \
-        model_state_unpack(buf, &d);                                                             \
-        stmt;                                                                                    \
-        model_state_pack(&d, forged);                                                            \
-        expect_error(fmi2DeSerializeFMUstate(c, forged, model_state_size(&d), &s2), fragment);   \
-        expect_error(fmi2SetFMUstate(c, forged), fragment);                                      \
-    } while (0)
-    FORGE_MEM(d.mem.n_phase = 0, "no phase of f_mode with a shaper timed by it");
-    FORGE_MEM(d.mem.past[1].k = d.mem.past[0].k, "past pieces are not in order");
-    FORGE_MEM(d.mem.past[0].k = -DJL_MAX_PLAN_END - 1, "past pieces are not in order");
-    FORGE_MEM(d.mem.past[0].x = NAN, "past piece of the shaper is not finite");
-    FORGE_MEM(d.mem.past[1].j = INFINITY, "past piece of the shaper is not finite");
-    FORGE_MEM(d.mem.phase[1].k = d.mem.phase[0].k, "phase of f_mode is not in order");
-    FORGE_MEM(d.mem.phase[1].P = d.mem.phase[0].P - 1.0, "phase of f_mode is not in order");
-    FORGE_MEM(d.mem.phase[0].k = DJL_MAX_PLAN_END + 1, "phase of f_mode is not in order");
-    FORGE_MEM(d.mem.phase[0].P = NAN, "phase of f_mode is not finite or its rate");
-    FORGE_MEM(d.mem.phase[0].rate = 0.0, "phase of f_mode is not finite or its rate");
-    FORGE_MEM(d.mem.phase[0].rate = 1e-300, "phase of f_mode is not finite or its rate");
-    FORGE_MEM(d.mem.phase[0].rate = 2.5, "phase of f_mode is not finite or its rate");
+    FORGE(d.mem.n_phase = 0, "no phase of f_mode with a shaper timed by it");
+    FORGE(d.mem.past[1].k = d.mem.past[0].k, "past pieces are not in order");
+    FORGE(d.mem.past[0].k = -DJL_MAX_PLAN_END - 1, "past pieces are not in order");
+    FORGE(d.mem.past[0].x = NAN, "past piece of the shaper is not finite");
+    FORGE(d.mem.past[1].j = INFINITY, "past piece of the shaper is not finite");
+    FORGE(d.mem.phase[1].k = d.mem.phase[0].k, "phase of f_mode is not in order");
+    FORGE(d.mem.phase[1].P = d.mem.phase[0].P - 1.0, "phase of f_mode is not in order");
+    FORGE(d.mem.phase[0].k = DJL_MAX_PLAN_END + 1, "phase of f_mode is not in order");
+    FORGE(d.mem.phase[0].P = NAN, "phase of f_mode is not finite or its rate");
+    FORGE(d.mem.phase[0].rate = 0.0, "phase of f_mode is not finite or its rate");
+    FORGE(d.mem.phase[0].rate = 1e-300, "phase of f_mode is not finite or its rate");
+    FORGE(d.mem.phase[0].rate = 2.5, "phase of f_mode is not finite or its rate");
     /* issue 21, fourth session (fuzz_state): f_mode itself, the input the shaper is timed
      * by, beyond what a set accepts (f_mode = DBL_MIN froze the outputs, then a change of
      * f_mode gave NaN after OK steps); at the bounds a set accepts, the state is accepted */
-    FORGE_MEM(d.f_mode = DBL_MIN, "the input f_mode is outside the range its shaper allows");
-    FORGE_MEM(d.f_mode = 1e-3, "the input f_mode is outside the range its shaper allows");
-    FORGE_MEM(d.f_mode = 2.5 / d.p.Te, "the input f_mode is outside the range its shaper allows");
+    FORGE(d.f_mode = DBL_MIN, "the input f_mode is outside the range its shaper allows");
+    FORGE(d.f_mode = 1e-3, "the input f_mode is outside the range its shaper allows");
+    FORGE(d.f_mode = 2.5 / d.p.Te, "the input f_mode is outside the range its shaper allows");
     model_state_unpack(buf, &d);
     d.f_mode = 2.0 / d.p.Te;
     model_state_pack(&d, forged);
@@ -985,7 +980,6 @@ static void run_forged_memory(void)
         fmi2FreeFMUstate(c1, &s1);
         fmi2FreeInstance(c1);
     }
-#undef FORGE_MEM
     still_usable(c, t);
     fmi2FreeFMUstate(c, &s);
     fmi2FreeFMUstate(c, &s2);
@@ -1392,14 +1386,6 @@ static void run_issue21_forged_plan(void)
     CHECK(d.plan.replanned == 1 && d.plan.level0 == 0.0, "the plan of the finding: replanned "
           "%d, level0 %.17g", (int)d.plan.replanned, d.plan.level0);
     /* the forged state of the finding, and values of the plan changed within their limits */
-#define FORGE(stmt, fragment)                                                                     \
-    do {                                                                                         \
-        model_state_unpack(buf, &d);                                                             \
-        stmt;                                                                                    \
-        model_state_pack(&d, forged);                                                            \
-        expect_error(fmi2DeSerializeFMUstate(c, forged, model_state_size(&d), &s2), fragment);   \
-        expect_error(fmi2SetFMUstate(c, forged), fragment);                                      \
-    } while (0)
     FORGE(d.plan.level0 = 0.56, "AL acceleration is not that of the plan's steps");
     FORGE(d.plan.level0 = -1e-3, "AL acceleration is not that of the plan's steps");
     for (q = 0; q < d.plan.n_steps && d.plan.step[q].N == 0; q++) continue;
@@ -1415,7 +1401,6 @@ static void run_issue21_forged_plan(void)
     FORGE(d.plan.piece[piece].v += 1e-6, "does not continue the one before");
     FORGE(d.plan.piece[piece].x += 1e-9, "does not continue the one before");
     FORGE(d.plan.piece[piece].k += 1, "acceleration is not that of the plan's steps");
-#undef FORGE
     /* nothing refused changed the instance: its true state stops within the limits */
     CHECK(fmi2SetFMUstate(c, s2) == fmi2OK, "set its own state: %s", last_message);
     for (i = 0; i < 2000 && !get_bool(c, VR_DONE); i++, t += 5e-4) {
