@@ -52,7 +52,7 @@ const char *model_state_name(int state);
 /* the data of an instance                                                  */
 
 #define MODEL_MAGIC 0x4a4c4446u /* "FDLJ" */
-#define MODEL_LAYOUT 6u          /* of model_data: a state of another layout is refused */
+#define MODEL_LAYOUT 7u          /* of model_data: a state of another layout is refused */
 
 /* The figures of the parametric move planned at initialisation (the calculated
  * parameters motion_time, N_F1..N_F4, v_reached, a_reached, d_reached): commands

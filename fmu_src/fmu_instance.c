@@ -124,21 +124,40 @@ static uint32_t read_u32(const void *state, size_t at)
 size_t model_state_stored_size(const void *state) { return read_u32(state, offsetof(model_data, size)); }
 
 /* 64-bit FNV-1a over the 8-byte words of a packed state but the checksum itself (the
- * padding of model_data included: it is zeroed before use and copied whole), a word at a
- * time: each step (h ^ w) * prime is a bijection of h and of w, so a change of any one
- * word always changes the checksum.  Any alignment. */
+ * padding of model_data included: it is zeroed before use and copied whole), in four
+ * lanes: word k goes to lane k % 4 (the words past the last whole group of four to lane
+ * 0), and the lanes are folded into one by the same step.  Each step (h ^ w) * prime is
+ * a bijection of h and of w, and a word reaches one lane only, so a change of any one
+ * word always changes the checksum.  Four lanes, not one: a step waits for the one
+ * before it in its lane (a multiply); one lane took 4.0 us for a 30 kB state at -O2,
+ * four take 1.2 us, and a save + restore checksums twice (layout 7; 6 had one lane).
+ * Any alignment. */
+#define FNV_BASIS 0xcbf29ce484222325u
+#define FNV_PRIME 0x100000001b3u
+/* the word at byte i of a state, the checksum's own read as 0 */
+static uint64_t state_word(const unsigned char *b, size_t i)
+{
+    uint64_t w;
+    memcpy(&w, b + i, 8);
+    return i == offsetof(model_data, checksum) ? 0 : w;
+}
+
 uint64_t model_state_checksum(const void *state, size_t size)
 {
     const unsigned char *b = (const unsigned char *)state;
-    size_t i, skip = offsetof(model_data, checksum);
-    uint64_t h = 0xcbf29ce484222325u, w;
-    for (i = 0; i + 8 <= size; i += 8) {
-        if (i == skip) continue;
-        memcpy(&w, b + i, 8);
-        h ^= w;
-        h *= 0x100000001b3u;
+    uint64_t h0 = FNV_BASIS, h1 = FNV_BASIS, h2 = FNV_BASIS, h3 = FNV_BASIS;
+    size_t i;
+    for (i = 0; i + 32 <= size; i += 32) {
+        h0 = (h0 ^ state_word(b, i)) * FNV_PRIME;
+        h1 = (h1 ^ state_word(b, i + 8)) * FNV_PRIME;
+        h2 = (h2 ^ state_word(b, i + 16)) * FNV_PRIME;
+        h3 = (h3 ^ state_word(b, i + 24)) * FNV_PRIME;
     }
-    return h;
+    for (; i + 8 <= size; i += 8) h0 = (h0 ^ state_word(b, i)) * FNV_PRIME;
+    h0 = (FNV_BASIS ^ h0) * FNV_PRIME; /* the lanes folded */
+    h0 = (h0 ^ h1) * FNV_PRIME;
+    h0 = (h0 ^ h2) * FNV_PRIME;
+    return (h0 ^ h3) * FNV_PRIME;
 }
 
 void model_state_seal(void *state, size_t size)

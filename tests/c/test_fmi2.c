@@ -621,6 +621,41 @@ static void run_state_packing(void)
         CHECK(sum == model_state_checksum(b, model_state_size(&d)), "sealed");
         b[head + 8] ^= 1;
         CHECK(sum != model_state_checksum(b, model_state_size(&d)), "entries sealed");
+        b[head + 8] ^= 1;
+    }
+    /* the checksum as docs/generator.md states it (FNV-1a in four lanes, word k in lane
+     * k % 4 but the words past the last group of four in lane 0, the checksum's own word
+     * read as 0, the lanes folded by the same step), and any one word changed changes it */
+    {
+        size_t n = model_state_size(&d) / 8, j, whole = n / 4 * 4;
+        size_t own = offsetof(model_data, checksum) / 8;
+        uint64_t lane[4], ref = 0xcbf29ce484222325u, w, sum, x = 0x9e3779b97f4a7c15u;
+        int changed = 0;
+        CHECK(n % 4 != 0, "a state whose words fill no whole group of four (%lu)",
+              (unsigned long)n);
+        for (j = 0; j < 4; j++) lane[j] = 0xcbf29ce484222325u;
+        for (j = 0; j < n; j++) {
+            memcpy(&w, b + 8 * j, 8);
+            if (j == own) w = 0;
+            lane[j < whole ? j % 4 : 0] = (lane[j < whole ? j % 4 : 0] ^ w) * 0x100000001b3u;
+        }
+        for (j = 0; j < 4; j++) ref = (ref ^ lane[j]) * 0x100000001b3u;
+        memcpy(&sum, b + offsetof(model_data, checksum), 8);
+        CHECK(sum == ref, "checksum %llx, four-lane FNV-1a %llx", (unsigned long long)sum,
+              (unsigned long long)ref);
+        for (j = 0; j < n; j++) {
+            if (j == own) continue;
+            x ^= x << 13, x ^= x >> 7, x ^= x << 17; /* xorshift: never 0 */
+            memcpy(&w, b + 8 * j, 8);
+            w ^= x;
+            memcpy(b + 8 * j, &w, 8);
+            changed += model_state_checksum(b, 8 * n) != sum;
+            w ^= x;
+            memcpy(b + 8 * j, &w, 8);
+        }
+        CHECK(changed == (int)n - 1, "%d of the %lu words change the checksum", changed,
+              (unsigned long)n - 1);
+        CHECK(model_state_checksum(b, 8 * n) == sum, "the state back as it was");
     }
     d.mem.n_past = d.mem.n_phase = 0;
     CHECK(model_state_size(&d) == head, "empty rings: the head alone");
