@@ -83,7 +83,81 @@ static void log3_cb(fmi3InstanceEnvironment e, fmi3Status s, fmi3String c, fmi3S
     trace("  log: %s", m);
 }
 
+/* FUZZ_POOL (tests/fuzz/build.sh, the libFuzzer build): the FMU's blocks of 128 kB and
+ * more (an instance, 322 kB; its check area of states, 293 kB) come from a pool of the
+ * harness, for FMI 2 through allocateMemory / freeMemory and for FMI 3 by building
+ * fmi3.c with calloc and free renamed to fuzz_calloc and fuzz_free.  ASan maps every such
+ * block afresh and unmaps it when it leaves its quarantine: that kernel work was half of
+ * the harness's time (docs/generator.md, "Where the FMI harness's time goes").  A pooled
+ * block stays poisoned until it is handed out again (an access to it is reported as a use
+ * after poison) and is handed out oldest first, zeroed (calloc's promise); only a stale
+ * pointer into a block already handed out again goes unseen, which the gcc replay of the
+ * corpus in the suite (plain ASan, full quarantine) still catches.  Smaller blocks (FMU
+ * states) go straight to ASan. */
+#ifdef FUZZ_POOL
+#include <sanitizer/allocator_interface.h>
+#include <sanitizer/asan_interface.h>
+
+#define POOL_MIN ((size_t)1 << 17)
+#define POOL_SLOTS 8
+
+static struct {
+    void *p;
+    size_t size;
+    unsigned long long age; /* when it was freed: the oldest is handed out first */
+} pool[POOL_SLOTS];
+static unsigned long long pool_clock;
+
+void *fuzz_calloc(size_t n, size_t size);
+void fuzz_free(void *p);
+
+void *fuzz_calloc(size_t n, size_t size)
+{
+    int i, best = -1;
+    void *p;
+    if (size != 0 && n > SIZE_MAX / size) return NULL;
+    if (n * size < POOL_MIN) return calloc(n, size);
+    for (i = 0; i < POOL_SLOTS; i++)
+        if (pool[i].p && pool[i].size == n * size && (best < 0 || pool[i].age < pool[best].age))
+            best = i;
+    if (best < 0) return calloc(n, size);
+    p = pool[best].p;
+    pool[best].p = NULL;
+    ASAN_UNPOISON_MEMORY_REGION(p, n * size);
+    return memset(p, 0, n * size);
+}
+
+void fuzz_free(void *p)
+{
+    size_t size;
+    int i, slot = -1;
+    if (!p) return;
+    size = __sanitizer_get_allocated_size(p);
+    if (size < POOL_MIN) {
+        free(p);
+        return;
+    }
+    for (i = 0; i < POOL_SLOTS; i++) { /* a free slot, or else the oldest block's */
+        if (!pool[i].p) {
+            slot = i;
+            break;
+        }
+        if (slot < 0 || pool[i].age < pool[slot].age) slot = i;
+    }
+    if (pool[slot].p) {
+        ASAN_UNPOISON_MEMORY_REGION(pool[slot].p, pool[slot].size);
+        free(pool[slot].p);
+    }
+    ASAN_POISON_MEMORY_REGION(p, size);
+    pool[slot].p = p;
+    pool[slot].size = size;
+    pool[slot].age = ++pool_clock;
+}
+
+static const fmi2CallbackFunctions cb2 = {log2_cb, fuzz_calloc, fuzz_free, NULL, NULL};
+#else
 static const fmi2CallbackFunctions cb2 = {log2_cb, calloc, free, NULL, NULL};
+#endif
 
 static int instantiate(fmu *f, int logging)
 {
