@@ -10,6 +10,7 @@ reproducers of issue 21).
 
 from __future__ import annotations
 
+import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -107,3 +108,24 @@ def test_open_findings_still_break_the_fmi_harness(tmp_path: Path) -> None:
             f"{f.name} no longer breaks an invariant: fixed? {proc.stderr[-2000:]}")
         assert "instantiate (FMI " in proc.stderr and "step from " in proc.stderr, (
             proc.stderr[-2000:])
+
+
+def _defines(sources: list[Path], name: str) -> bool:
+    """Whether one of ``sources`` defines C function ``name`` (a definition starts at
+    column 0 with its return type and does not end in ``;``, the style of fmu_src/)."""
+    pattern = re.compile(rf"^[A-Za-z_][\w \t\*]*\b{re.escape(name)}\s*\([^;{{]*$", re.M)
+    return any(pattern.search(s.read_text()) for s in sources)
+
+
+@pytest.mark.parametrize("ignorelist", ["sanitize_ignore.txt", "coverage_ignore.txt"])
+def test_fuzz_ignorelists_name_functions_that_exist(ignorelist: str) -> None:
+    """tests/fuzz/build.sh passes these lists to clang, which ignores a name it never
+    meets: a misspelt or renamed function would silently be instrumented again (the
+    sanitizers back on the checksum, its time back in fuzzing).  Each ``fun:`` entry must
+    name a function defined in fmu_src/ or tests/fuzz/."""
+    sources = sorted(fmu_src_dir().glob("*.c")) + sorted(FUZZ.glob("*.c"))
+    names = re.findall(r"^fun:(\w+)\s*$", (FUZZ / ignorelist).read_text(), re.M)
+    assert names, f"{ignorelist} lists no function"
+    missing = [n for n in names if not _defines(sources, n)]
+    assert not missing, f"{ignorelist} names functions defined nowhere: {missing}"
+    assert not _defines(sources, names[0] + "_misspelt"), "the check can fail"
