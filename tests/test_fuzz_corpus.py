@@ -128,5 +128,6 @@ def test_fuzz_ignorelists_name_functions_that_exist(ignorelist: str) -> None:
              re.findall(r"^fun:(.*)$", (FUZZ / ignorelist).read_text(), re.M)]
     assert names, f"{ignorelist} lists no function"
     missing = [n for n in names if not re.fullmatch(r"\w+", n) or not _defines(sources, n)]
-    assert not missing, f"{ignorelist} has entries that are no plain name of a function defined in fmu_src/ or tests/fuzz/: {missing}"
+    assert not missing, (f"{ignorelist}: entries not the plain name of a function defined"
+                         f" in fmu_src/ or tests/fuzz/: {missing}")
     assert not _defines(sources, names[0] + "_misspelt"), "the check can fail"
