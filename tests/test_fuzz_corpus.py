@@ -111,10 +111,24 @@ def test_open_findings_still_break_the_fmi_harness(tmp_path: Path) -> None:
 
 
 def _defines(sources: list[Path], name: str) -> bool:
-    """Whether one of ``sources`` defines C function ``name`` (a definition starts at
-    column 0 with its return type and does not end in ``;``, the style of fmu_src/)."""
-    pattern = re.compile(rf"^[A-Za-z_][\w \t\*]*\b{re.escape(name)}\s*\([^;{{]*$", re.M)
+    """Whether one of ``sources`` defines C function ``name``: its return type starts at
+    column 0 (the style of fmu_src/), and its parameter list, on one line or several, is
+    followed by ``{``, not by ``;`` as a prototype's is."""
+    pattern = re.compile(
+        rf"^[A-Za-z_][\w \t\*]*\b{re.escape(name)}\s*\([^;{{}}]*\)\s*\{{", re.M)
     return any(pattern.search(s.read_text()) for s in sources)
+
+
+def test_defines_tells_a_definition_from_a_prototype(tmp_path: Path) -> None:
+    """The ignorelist check below counts only definitions, whatever their layout."""
+    c = tmp_path / "f.c"
+    c.write_text("static int f(int a,\n             int b);\n"
+                 "int g(void (*cb)(int), int n) { return n; }\n"
+                 "static uint32_t h(const uint8_t *p,\n                  size_t n)\n{\n"
+                 "    return f(1,\n             2);\n}\n")
+    assert not _defines([c], "f")
+    assert _defines([c], "g")
+    assert _defines([c], "h")
 
 
 @pytest.mark.parametrize("ignorelist", ["sanitize_ignore.txt", "coverage_ignore.txt"])
