@@ -6,12 +6,15 @@
   where the acceleration steps: no jerk limit);
 * :func:`score_uncertainty` -- the worst residual and the worst-case settling
   time over a scenario's uncertainty (its scoring set by default), the
-  reference planned on the nominal map, the band fixed.
+  reference planned on the nominal map, the band fixed;
+* :func:`score_points` -- the same, point by point (:class:`PointScores`).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -20,9 +23,9 @@ from .metrics import settling_time
 from .plant import ScheduledMode, free_amplitude, hermite_mid
 from .scenario import Scenario
 from .simulation.master import CoSimResult, scheduled, step_plant
-from .uncertainty import UncertaintySet
+from .uncertainty import Perturbation, UncertaintySet
 
-__all__ = ["peaks", "score_uncertainty", "settling_of"]
+__all__ = ["PointScores", "peaks", "score_points", "score_uncertainty", "settling_of"]
 
 
 def settling_of(run: CoSimResult, band: float) -> float:
@@ -182,6 +185,99 @@ def _settling_free(run: CoSimResult, eps: np.ndarray, k_free: int, state: np.nda
     return out_t
 
 
+@dataclass(frozen=True)
+class PointScores:
+    """Residual and settling time of one run at every point of an uncertainty set.
+
+    Attributes
+    ----------
+    points : tuple of Perturbation
+        The points, in the set's order.
+    residual : ndarray
+        Residual (m) at each point: the free oscillation's amplitude when the
+        reference ends (summed over the modes).
+    settling : ndarray
+        Settling time (s, from the motion's start) at each point, in the fixed band.
+    """
+
+    points: tuple[Perturbation, ...]
+    residual: np.ndarray
+    settling: np.ndarray
+
+    def worst(self) -> dict[str, Any]:
+        """Return ``residual_worst``, ``settling_time_worst``, ``worst_point`` (the worst case)."""
+        worst_t, where = -math.inf, ""
+        for p, t in zip(self.points, self.settling.tolist(), strict=True):
+            if t > worst_t or (math.isnan(t) and not where):
+                worst_t, where = t, p.label()
+        return {"residual_worst": float(self.residual.max()) if self.points else 0.0,
+                "settling_time_worst": worst_t, "worst_point": where}
+
+
+def score_points(run: CoSimResult, sc: Scenario, band: float,
+                 points: UncertaintySet | Sequence[Perturbation]) -> PointScores:
+    """Residual and settling time of a run at every point of a set (the reference unchanged).
+
+    The numbers of :func:`score_uncertainty`, point by point.
+
+    Parameters
+    ----------
+    run : CoSimResult
+        The nominal run (full record).
+    sc : Scenario
+        Its scenario (the mode map).
+    band : float
+        The settling band (m), fixed for every point.
+    points : UncertaintySet or sequence of Perturbation
+        The points.
+
+    Returns
+    -------
+    PointScores
+    """
+    if run.plant_input is None:
+        raise ValueError("the run keeps no plant input (made by an older master?)")
+    if not band > 0:
+        raise ValueError(f"band must be > 0, got {band!r}")
+    pts = list(getattr(points, "points", points))
+    pivot = sc.z.z0 + 0.5 * sc.z.distance
+    sm = scheduled(sc.modemap.scheduled())
+    h, n = run.step, run.t.size - 1
+    k_free = _free_from(run)
+    k_end = min(n, math.ceil(run.t_end / h - 1e-9))
+    z, v_z = run.z, run.v_z
+    zm = hermite_mid(z[:k_free], v_z[:k_free], z[1:k_free + 1], v_z[1:k_free + 1], h)
+    ends = np.array([z[k_end], z[k_free]])
+    nominal_mid = [m.f_array(zm) for m in sm]
+    nominal_end = [m.f_array(ends) for m in sm]
+    P, M = len(pts), len(sm)
+    # every (point, mode) pair is one row of a single compiled plant run (the modes are
+    # independent; the points' deflections are the sums of their own rows)
+    rows: list[ScheduledMode] = []
+    f_rows: list[np.ndarray] = []
+    f_end = np.empty((P, M))
+    f_free = np.empty((P, M))
+    z_free = np.empty((P, M))
+    for r, p in enumerate(pts):
+        for i, m in enumerate(sm):
+            rows.append(ScheduledMode(m.f_of_z, p.zeta(m.zeta), m.gain, m.name, m.f_of_z_array))
+            f_rows.append(p.frequencies(m.f_array, zm, pivot, nominal_mid[i]))
+            fe = p.frequencies(m.f_array, ends, pivot, nominal_end[i])
+            f_end[r, i], f_free[r, i] = float(fe[0]), float(fe[1])
+            z_free[r, i] = rows[-1].zeta
+    f_mid = np.vstack(f_rows) if k_free else np.zeros((P * M, 0))
+    _, states = step_plant(run.plant_input, h, f_mid, rows, k_free)  # (k_free + 1, 2 P M)
+    eps = states[:, 0::2].reshape(k_free + 1, P, M).sum(axis=2).T  # (P, k_free + 1)
+    state_free = states[k_free].reshape(P, 2 * M)
+    se = states[k_end].reshape(P, M, 2)
+    w = 2.0 * np.pi * f_end
+    sig = z_free * w
+    resid = np.hypot(se[:, :, 0], (se[:, :, 1] + sig * se[:, :, 0])
+                     / (w * np.sqrt(1.0 - z_free**2))).sum(axis=1)
+    ts = _settling_free(run, eps, k_free, state_free, f_free, z_free, band)
+    return PointScores(tuple(pts), resid, np.asarray(ts, dtype=float))
+
+
 def score_uncertainty(run: CoSimResult, sc: Scenario, band: float,
                       points: UncertaintySet | None = None) -> dict[str, Any]:
     """Worst residual and worst settling time of a run over the scenario's uncertainty.
@@ -209,50 +305,5 @@ def score_uncertainty(run: CoSimResult, sc: Scenario, band: float,
     dict
         ``residual_worst``, ``settling_time_worst``, ``worst_point``.
     """
-    if run.plant_input is None:
-        raise ValueError("the run keeps no plant input (made by an older master?)")
-    if not band > 0:
-        raise ValueError(f"band must be > 0, got {band!r}")
     uset = sc.uncertainty.scoring_set() if points is None else points
-    pivot = sc.z.z0 + 0.5 * sc.z.distance
-    sm = scheduled(sc.modemap.scheduled())
-    h, n = run.step, run.t.size - 1
-    k_free = _free_from(run)
-    k_end = min(n, math.ceil(run.t_end / h - 1e-9))
-    z, v_z = run.z, run.v_z
-    zm = hermite_mid(z[:k_free], v_z[:k_free], z[1:k_free + 1], v_z[1:k_free + 1], h)
-    ends = np.array([z[k_end], z[k_free]])
-    nominal_mid = [m.f_array(zm) for m in sm]
-    nominal_end = [m.f_array(ends) for m in sm]
-    pts = list(uset.points)
-    P, M = len(pts), len(sm)
-    # every (point, mode) pair is one row of a single compiled plant run (the modes are
-    # independent; the points' deflections are the sums of their own rows)
-    rows: list[ScheduledMode] = []
-    f_rows: list[np.ndarray] = []
-    f_end = np.empty((P, M))
-    f_free = np.empty((P, M))
-    z_free = np.empty((P, M))
-    for r, p in enumerate(pts):
-        for i, m in enumerate(sm):
-            rows.append(ScheduledMode(m.f_of_z, p.zeta(m.zeta), m.gain, m.name, m.f_of_z_array))
-            f_rows.append(p.frequencies(m.f_array, zm, pivot, nominal_mid[i]))
-            fe = p.frequencies(m.f_array, ends, pivot, nominal_end[i])
-            f_end[r, i], f_free[r, i] = float(fe[0]), float(fe[1])
-            z_free[r, i] = rows[-1].zeta
-    f_mid = np.vstack(f_rows) if k_free else np.zeros((P * M, 0))
-    _, states = step_plant(run.plant_input, h, f_mid, rows, k_free)  # (k_free + 1, 2 P M)
-    eps = states[:, 0::2].reshape(k_free + 1, P, M).sum(axis=2).T  # (P, k_free + 1)
-    state_free = states[k_free].reshape(P, 2 * M)
-    se = states[k_end].reshape(P, M, 2)
-    w = 2.0 * np.pi * f_end
-    sig = z_free * w
-    resid = np.hypot(se[:, :, 0], (se[:, :, 1] + sig * se[:, :, 0])
-                     / (w * np.sqrt(1.0 - z_free**2))).sum(axis=1)
-    ts = _settling_free(run, eps, k_free, state_free, f_free, z_free, band)
-    worst_t, where = -math.inf, ""
-    for p, t in zip(pts, ts.tolist(), strict=True):
-        if t > worst_t or (math.isnan(t) and not where):
-            worst_t, where = t, p.label()
-    return {"residual_worst": float(resid.max()) if P else 0.0,
-            "settling_time_worst": worst_t, "worst_point": where}
+    return score_points(run, sc, band, uset).worst()

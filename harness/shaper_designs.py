@@ -23,6 +23,9 @@ Shapers (``K = exp(-ζπ/√(1-ζ²))``):
   ``A ∝ [1 - 1/√2, (√2 - 1) K', (1 - 1/√2) K'²]`` with
   ``K' = exp(-0.75 ζπ/√(1-ζ²))``; zero residual, adds ``3 T_d / 4``
   (between ZV and ZVD in robustness and length).
+* SI (specified insensitivity, Singhose, Seering & Singer 1996; :func:`si_shaper`):
+  three impulses, V <= 5 % over a stated band of frequencies, as short as that
+  allows;
 * EI (extra-insensitive, Singhose et al. 1994): three impulses; the residual
   at the tuned mode is the tolerance ``V_tol`` (5 % by default), not zero,
   with a local maximum there and zeros on either side, which widens the band
@@ -39,12 +42,14 @@ shaper candidates); :mod:`harness.peers.shapers` convolves it with a profile.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-__all__ = ["SHAPERS", "Shaper", "ei", "make_shaper", "mzv", "zv", "zvd"]
+__all__ = ["SHAPERS", "V_TOL", "Shaper", "band_vibration", "ei", "make_shaper", "mzv",
+           "si_shaper", "zv", "zvd"]
 
 SHAPERS = ("ZV", "ZVD", "MZV", "EI")
 
@@ -206,3 +211,91 @@ def make_shaper(name: str, f: float, zeta: float = 0.0, **kw: Any) -> Shaper:
     except KeyError:
         raise ValueError(f"unknown shaper {name!r}; choose from {SHAPERS}") from None
     return fn(f, zeta, **kw)
+
+
+# ------------------------------------------------ specified insensitivity
+
+V_TOL = 0.05
+"""The vibration tolerance of the SI shaper: V(f) ≤ 5 % over the band."""
+
+
+def _best_at(t3: float, A: np.ndarray, ratios: np.ndarray, freqs: np.ndarray,
+             zeta: float) -> tuple[float, np.ndarray, np.ndarray]:
+    """Return the best (least worst V over ``freqs``) design of total delay ``t3``.
+
+    V(f) = |A₁ e^{−σ t₃} + A₂ e^{σ (t₂ − t₃) + iω_d t₂} + A₃ e^{iω_d t₃}|, over the
+    amplitude grid ``A`` (G, 3) and the middle delays ``ratios * t3``.
+    """
+    w = 2.0 * np.pi * freqs
+    sig, wd = zeta * w, w * math.sqrt(1.0 - zeta * zeta)
+    t2 = ratios * t3
+    e2 = np.exp(sig[None, :] * (t2[:, None] - t3) + 1j * wd[None, :] * t2[:, None])  # (R, F)
+    e3 = np.exp(1j * wd * t3)                                                         # (F,)
+    e1 = np.exp(-sig * t3)                                                            # (F,)
+    V = np.abs(A[:, 0, None, None] * e1[None, None, :] + A[:, 1, None, None] * e2[None]
+               + A[:, 2, None, None] * e3[None, None, :]).max(axis=2)                 # (G, R)
+    g, r = np.unravel_index(int(np.argmin(V)), V.shape)
+    return float(V[g, r]), A[g], np.array([0.0, float(t2[r]), t3])
+
+
+def si_shaper(f: float, zeta: float, band: float, *, v_tol: float = V_TOL) -> Shaper:
+    """Return the shortest three-impulse shaper with V ≤ ``v_tol`` over f·(1 ± band).
+
+    Parameters
+    ----------
+    f : float
+        Design frequency (Hz).
+    zeta : float
+        Damping ratio.
+    band : float
+        Half-width of the band, relative (e.g. 0.1).
+    v_tol : float
+        Vibration tolerance over the band.
+
+    Returns
+    -------
+    Shaper
+        Amplitudes ≥ 0 summing to 1; delays 0 < t2 < t3.
+
+    Notes
+    -----
+    A direct search over the total delay t3 (a 2 % step of the damped period,
+    then a 0.2 % step below the first feasible one), the middle delay
+    (0.35..0.65 of t3) and the amplitudes (a grid of step 1/40): the first
+    t3 whose best design keeps V ≤ v_tol over 81 points of the band wins.
+    Without any, the design with the least worst V.
+    """
+    if not (f > 0 and 0.0 <= zeta < 1.0 and 0.0 <= band < 1.0):
+        raise ValueError(f"bad SI design inputs f={f!r}, zeta={zeta!r}, band={band!r}")
+    Td = 1.0 / (f * math.sqrt(1.0 - zeta * zeta))
+    freqs = f * (1.0 + np.linspace(-band, band, 81)) if band > 0 else np.array([f])
+    k = 40
+    grid = np.array([(i, j) for i in range(k + 1) for j in range(k + 1 - i)], float) / k
+    A = np.column_stack([1.0 - grid.sum(1), grid[:, 0], grid[:, 1]])
+    ratios = np.arange(0.35, 0.651, 0.025)
+    best: tuple[float, np.ndarray, np.ndarray] | None = None
+    prev = 0.5 * Td
+    for t3 in Td * np.arange(0.5, 2.0 + 1e-9, 0.02):
+        cand = _best_at(float(t3), A, ratios, freqs, zeta)
+        if best is None or cand[0] < best[0]:
+            best = cand
+        if cand[0] <= v_tol:
+            for t3f in np.arange(prev, t3, 0.002 * Td):  # refine below the first feasible
+                fine = _best_at(float(t3f), A, ratios, freqs, zeta)
+                if fine[0] <= v_tol:
+                    cand = fine
+                    break
+            return Shaper("SI", cand[1] / cand[1].sum(), cand[2], f, zeta)
+        prev = float(t3)
+    assert best is not None
+    return Shaper("SI", best[1] / best[1].sum(), best[2], f, zeta)
+
+
+def band_vibration(shaper: Shaper, f: float, zeta: float, band: float) -> float:
+    """Return the worst V(f') of ``shaper`` over f' in f·(1 ± band) (201 points)."""
+    freqs = f * (1.0 + np.linspace(-band, band, 201))
+    w = 2.0 * np.pi * freqs
+    sig, wd = zeta * w, w * math.sqrt(1.0 - zeta * zeta)
+    tn = float(shaper.t[-1])
+    ph = np.exp(sig[:, None] * (shaper.t[None, :] - tn) + 1j * wd[:, None] * shaper.t[None, :])
+    return float(np.abs(ph @ shaper.A).max())

@@ -13,7 +13,10 @@ are drawn: the *tuning* set the robust methods minimise over, and the finer
 * :func:`check_map_error` -- a bound ``map_error`` in [0, 1) (tuning, tables);
 * :func:`check_map_errors` -- errors e, finite and > −1 (a frequency > 0);
 * :class:`UncertaintySpec`, :func:`parse_uncertainty` -- the ranges, and the
-  ``--uncertainty`` grammar (``map_scale=0.1,map_slope=0.3,z_shift=0.05,damping=0.5:2``).
+  ``--uncertainty`` grammar (``map_scale=0.1,map_slope=0.3,z_shift=0.05,damping=0.5:2``);
+* :func:`width_sweeps`, :class:`WidthSweep`, :func:`level`, :func:`scaled_uncertainty` --
+  the actual error wider than stated: each kind alone and the whole box, out to
+  twice the stated ranges, every point with its width (1 = the stated edge).
 """
 
 from __future__ import annotations
@@ -30,14 +33,19 @@ import numpy as np
 __all__ = [
     "DEFAULT_ERRORS",
     "DEFAULT_UNCERTAINTY",
+    "KINDS",
     "WORST_ERRORS",
     "WORST_SPAN",
     "Perturbation",
     "UncertaintySet",
     "UncertaintySpec",
+    "WidthSweep",
     "check_map_error",
     "check_map_errors",
+    "level",
     "parse_uncertainty",
+    "scaled_uncertainty",
+    "width_sweeps",
 ]
 
 DEFAULT_ERRORS = np.linspace(-0.2, 0.2, 41)
@@ -361,3 +369,151 @@ def _drawn(spec: UncertaintySpec, which: str) -> UncertaintySet:
     if which == "tuning":
         return spec._set(spec.TUNING_POINTS, 2, "tuning set")
     return spec._set(spec.SCORING_POINTS, 3, "scoring set")
+
+
+# ------------------------------------------------------------ wider than stated
+
+KINDS = ("map_scale", "map_slope", "z_shift", "damping")
+"""The kinds of error an :class:`UncertaintySpec` states, in its order."""
+
+_FIELD = {"map_scale": "scale", "map_slope": "slope", "z_shift": "shift", "damping": "damping"}
+"""The :class:`Perturbation` field of each kind."""
+
+_KIND_LABEL = {"map_scale": "map scale", "map_slope": "map slope", "z_shift": "z shift",
+               "damping": "damping"}
+
+
+@dataclass(frozen=True)
+class WidthSweep:
+    """Points of one kind of error, or of the whole box, out to a multiple of the stated width.
+
+    A point's *level* is the least factor s such that the point lies within the
+    stated ranges scaled by s (:meth:`UncertaintySpec.level`): level 1 is the
+    edge of the stated set, level 2 twice as wide.  The worst case over the
+    points of level ≤ s is the worst case of an actual error s times the stated
+    one (for this kind alone, or for the whole box).
+
+    Attributes
+    ----------
+    kind : str
+        One of :data:`KINDS`, or ``"box"`` (every stated kind at once).
+    points : tuple of Perturbation
+        The points, nominal first.
+    levels : tuple of float
+        The level of each point.
+    """
+
+    kind: str
+    points: tuple[Perturbation, ...]
+    levels: tuple[float, ...]
+
+    @property
+    def label(self) -> str:
+        """The kind in words (``map scale``, ``box``)."""
+        return "every stated kind at once" if self.kind == "box" else _KIND_LABEL[self.kind]
+
+    def worst_upto(self, values: np.ndarray, widths: np.ndarray) -> np.ndarray:
+        """Largest of ``values`` (one per point) over the points of level ≤ each width."""
+        lev = np.asarray(self.levels)
+        v = np.asarray(values, dtype=float)
+        return np.array([float(np.max(np.where(lev <= w + 1e-9, v, -np.inf)))
+                         for w in np.asarray(widths, dtype=float)])
+
+
+def _wide(spec: UncertaintySpec, s: float) -> dict[str, Any]:
+    lo, hi = spec.damping
+    return {"map_scale": spec.map_scale * s, "map_slope": spec.map_slope * s,
+            "z_shift": spec.z_shift * s, "damping": (lo ** s, hi ** s)}
+
+
+def scaled_uncertainty(spec: UncertaintySpec, s: float) -> UncertaintySpec:
+    """Return ``spec`` with every range ``s`` times as wide (damping factors to the power s).
+
+    Raises
+    ------
+    ValueError
+        If ``s`` is not finite and >= 0, or a widened range leaves its domain
+        (a map scale or slope of 1 or more, damping factors beyond 100).
+    """
+    if not (math.isfinite(s) and s >= 0.0):
+        raise ValueError(f"width factor must be finite and >= 0, got {s!r}")
+    return UncertaintySpec(**_wide(spec, s))
+
+
+def level(spec: UncertaintySpec, p: Perturbation) -> float:
+    """Return the least factor s such that ``p`` lies within ``spec``'s ranges times s.
+
+    ``inf`` if ``p`` varies a kind the spec does not state.
+    """
+    out = 0.0
+    for kind, on in spec.active.items():
+        x = getattr(p, _FIELD[kind])
+        if kind == "damping":
+            if x == 1.0:
+                continue
+            lo, hi = spec.damping
+            ref = math.log(hi) if x > 1.0 else math.log(lo)
+            r = math.log(x) / ref if on else math.inf
+        else:
+            if x == 0.0:
+                continue
+            r = abs(x) / getattr(spec, kind) if on else math.inf
+        out = max(out, r)
+    return out
+
+
+def width_sweeps(spec: UncertaintySpec, top: float = 2.0, per_side: int = 80,
+                 box_levels: int = 8) -> list[WidthSweep]:
+    """Return the points of each stated kind alone, and of the box, out to ``top`` times its width.
+
+    Parameters
+    ----------
+    spec : UncertaintySpec
+        The stated uncertainty.
+    top : float
+        The widest level (2: twice the stated ranges).
+    per_side : int
+        Points of each kind on each side of the nominal value (levels
+        ``top/per_side`` apart; half as many for the kinds other than the map
+        scale).
+    box_levels : int
+        Levels of the box (``top/box_levels`` apart), each the 3^d grid of the
+        widened box; only when two or more kinds are stated.
+
+    Returns
+    -------
+    list of WidthSweep
+        One per stated kind, then the box; empty when nothing is stated.
+    """
+    if not (math.isfinite(top) and top > 0.0):
+        raise ValueError(f"top must be finite and > 0, got {top!r}")
+    scaled_uncertainty(spec, top)  # the widest ranges must be valid
+    on = [k for k, v in spec.active.items() if v]
+    out: list[WidthSweep] = []
+    for kind in on:
+        n = per_side if kind == "map_scale" else max(4, per_side // 2)
+        levels = [top * i / n for i in range(1, n + 1)]
+        pts: list[Perturbation] = [Perturbation()]
+        lev: list[float] = [0.0]
+        for s in levels:
+            w = _wide(spec, s)[kind]
+            ends = (w[0], w[1]) if kind == "damping" else (-w, w)
+            for x in ends:
+                pts.append(Perturbation(**{_FIELD[kind]: float(x)}))
+                lev.append(s)
+        out.append(WidthSweep(kind, tuple(pts), tuple(lev)))
+    if len(on) > 1:
+        pts = [Perturbation()]
+        lev = [0.0]
+        for i in range(1, box_levels + 1):
+            s = top * i / box_levels
+            w = _wide(spec, s)
+            axes = [((w[k][0], 1.0, w[k][1]) if k == "damping" else (-w[k], 0.0, w[k]))
+                    for k in on]
+            for combo in itertools.product(*axes):
+                p = Perturbation(**{_FIELD[k]: float(x) for k, x in zip(on, combo, strict=True)})
+                if p not in pts:
+                    pts.append(p)
+                    lev.append(level(spec, p))
+        out.append(WidthSweep("box", tuple(pts), tuple(lev)))
+    return out

@@ -18,101 +18,14 @@ measures.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
+from ..shaper_designs import V_TOL, band_vibration, si_shaper
 from .context import PeerContext, PeerSpec
 from .shapers import Shaper, shape, zvd
 from .trajectory import PiecewiseJerk
 
-__all__ = ["band_vibration", "build_mm_zvd", "build_si", "mm_zvd", "si_shaper"]
-
-V_TOL = 0.05
-"""The vibration tolerance of the SI shaper: V(f) ≤ 5 % over the band."""
-
-
-def _best_at(t3: float, A: np.ndarray, ratios: np.ndarray, freqs: np.ndarray,
-             zeta: float) -> tuple[float, np.ndarray, np.ndarray]:
-    """Return the best (least worst V over ``freqs``) design of total delay ``t3``.
-
-    V(f) = |A₁ e^{−σ t₃} + A₂ e^{σ (t₂ − t₃) + iω_d t₂} + A₃ e^{iω_d t₃}|, over the
-    amplitude grid ``A`` (G, 3) and the middle delays ``ratios * t3``.
-    """
-    w = 2.0 * np.pi * freqs
-    sig, wd = zeta * w, w * math.sqrt(1.0 - zeta * zeta)
-    t2 = ratios * t3
-    e2 = np.exp(sig[None, :] * (t2[:, None] - t3) + 1j * wd[None, :] * t2[:, None])  # (R, F)
-    e3 = np.exp(1j * wd * t3)                                                         # (F,)
-    e1 = np.exp(-sig * t3)                                                            # (F,)
-    V = np.abs(A[:, 0, None, None] * e1[None, None, :] + A[:, 1, None, None] * e2[None]
-               + A[:, 2, None, None] * e3[None, None, :]).max(axis=2)                 # (G, R)
-    g, r = np.unravel_index(int(np.argmin(V)), V.shape)
-    return float(V[g, r]), A[g], np.array([0.0, float(t2[r]), t3])
-
-
-def si_shaper(f: float, zeta: float, band: float, *, v_tol: float = V_TOL) -> Shaper:
-    """Return the shortest three-impulse shaper with V ≤ ``v_tol`` over f·(1 ± band).
-
-    Parameters
-    ----------
-    f : float
-        Design frequency (Hz).
-    zeta : float
-        Damping ratio.
-    band : float
-        Half-width of the band, relative (e.g. 0.1).
-    v_tol : float
-        Vibration tolerance over the band.
-
-    Returns
-    -------
-    Shaper
-        Amplitudes ≥ 0 summing to 1; delays 0 < t2 < t3.
-
-    Notes
-    -----
-    A direct search over the total delay t3 (a 2 % step of the damped period,
-    then a 0.2 % step below the first feasible one), the middle delay
-    (0.35..0.65 of t3) and the amplitudes (a grid of step 1/40): the first
-    t3 whose best design keeps V ≤ v_tol over 81 points of the band wins.
-    Without any, the design with the least worst V.
-    """
-    if not (f > 0 and 0.0 <= zeta < 1.0 and 0.0 <= band < 1.0):
-        raise ValueError(f"bad SI design inputs f={f!r}, zeta={zeta!r}, band={band!r}")
-    Td = 1.0 / (f * math.sqrt(1.0 - zeta * zeta))
-    freqs = f * (1.0 + np.linspace(-band, band, 81)) if band > 0 else np.array([f])
-    k = 40
-    grid = np.array([(i, j) for i in range(k + 1) for j in range(k + 1 - i)], float) / k
-    A = np.column_stack([1.0 - grid.sum(1), grid[:, 0], grid[:, 1]])
-    ratios = np.arange(0.35, 0.651, 0.025)
-    best: tuple[float, np.ndarray, np.ndarray] | None = None
-    prev = 0.5 * Td
-    for t3 in Td * np.arange(0.5, 2.0 + 1e-9, 0.02):
-        cand = _best_at(float(t3), A, ratios, freqs, zeta)
-        if best is None or cand[0] < best[0]:
-            best = cand
-        if cand[0] <= v_tol:
-            for t3f in np.arange(prev, t3, 0.002 * Td):  # refine below the first feasible
-                fine = _best_at(float(t3f), A, ratios, freqs, zeta)
-                if fine[0] <= v_tol:
-                    cand = fine
-                    break
-            return Shaper("SI", cand[1] / cand[1].sum(), cand[2], f, zeta)
-        prev = float(t3)
-    assert best is not None
-    return Shaper("SI", best[1] / best[1].sum(), best[2], f, zeta)
-
-
-def band_vibration(shaper: Shaper, f: float, zeta: float, band: float) -> float:
-    """Return the worst V(f') of ``shaper`` over f' in f·(1 ± band) (201 points)."""
-    freqs = f * (1.0 + np.linspace(-band, band, 201))
-    w = 2.0 * np.pi * freqs
-    sig, wd = zeta * w, w * math.sqrt(1.0 - zeta * zeta)
-    tn = float(shaper.t[-1])
-    ph = np.exp(sig[:, None] * (shaper.t[None, :] - tn) + 1j * wd[:, None] * shaper.t[None, :])
-    return float(np.abs(ph @ shaper.A).max())
-
+__all__ = ["V_TOL", "band_vibration", "build_mm_zvd", "build_si", "mm_zvd", "si_shaper"]
 
 def mm_zvd(freqs: list[float], zetas: list[float]) -> Shaper:
     """Return the convolution of one ZVD per mode (frequencies in Hz, damping ratios)."""

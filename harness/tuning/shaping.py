@@ -50,7 +50,8 @@ from ..simulation.session import Session
 from ..simulation.shaped_axis import ShaperSpec
 from ..uncertainty import Perturbation
 
-__all__ = ["ShapedObjective", "ShapedWindow", "ShaperTuning", "optimal_shaper", "robust_shaper"]
+__all__ = ["Quiet", "ShapedObjective", "ShapedWindow", "ShaperTuning", "optimal_shaper",
+           "robust_shaper"]
 
 
 def _patch(center: tuple[float, ...], radius: float = 0.06, step: float = 0.01) -> np.ndarray:
@@ -736,20 +737,59 @@ _POLYGON = 16
 """Sides of the polygon inside which the residual's phasor is kept (an inner approximation)."""
 
 
+def _phasor_polygon(C: np.ndarray, sig: np.ndarray, wd: np.ndarray,
+                    support: np.ndarray) -> np.ndarray:
+    """Rows whose values bound a residual's phasor from inside: shape (rows, polygon, n)."""
+    th = 2.0 * np.pi * np.arange(_POLYGON) / _POLYGON
+    V0 = C[:, 0, support]
+    V1 = (C[:, 1, support] + sig[:, None] * V0) / wd[:, None]
+    return np.cos(th)[None, :, None] * V0[:, None] + np.sin(th)[None, :, None] * V1[:, None]
+
+
+@dataclass
+class Quiet:
+    """Modes a design must leave quiet: each one's residual within its own bound.
+
+    Attributes
+    ----------
+    objective : ShapedObjective
+        The same base, planned on a scenario whose modes are the ones to keep
+        quiet (:meth:`harness.tuning.graceful.UnmodelledModes.scenario`), at its points.
+    bound : ndarray
+        The most each row's residual may be (m): one per (point, mode) row of
+        the objective, points first.
+    """
+
+    objective: ShapedObjective
+    bound: np.ndarray
+
+    def ratio(self, amplitudes: np.ndarray, delays: tuple[int, ...]) -> float:
+        """Return the largest residual over its bound of a design (≤ 1: quiet)."""
+        amp, _, _ = self.objective.residuals(np.asarray(amplitudes, float)[:, None], delays)
+        return float(np.max(amp[..., 0].ravel() / self.bound))
+
+
 def _lp_sweep(obj: ShapedObjective, D: int, support: np.ndarray, signed: bool, target: float,
-              residual: float, limits: tuple[tuple[np.ndarray, float, float], ...]
-              ) -> tuple[int, np.ndarray, float] | None:
+              residual: float, limits: tuple[tuple[np.ndarray, float, float], ...],
+              minimax: np.ndarray | None = None, deadlines: np.ndarray | None = None,
+              quiet: Quiet | None = None) -> tuple[int, np.ndarray, float] | None:
     """Return the earliest settling sample reachable with impulses at ``support``, the design, t.
 
-    The error at every point is kept within ``target`` bands from sample m to
-    the motion's end, the residual oscillation after it within ``residual``
-    bands (its phasor inside a polygon); m goes down four samples at a time, then one, each linear
-    programme starting from the last success's basis, until it fails.  ``signed``:
-    amplitudes in [−1, 1] (as ``x = A + 1 ≥ 0``), the kinematic ``limits``
-    (rows ``M @ A`` within [lo, hi]) added where the solution breaks them.
-    Amplitudes at delays 0 and D are kept ≥ 0.001 (the span stays D).
+    The error at every point of ``minimax`` (default every point) is kept
+    within ``target`` bands from sample m to the motion's end, the residual
+    oscillation after it within ``residual`` bands (its phasor inside a
+    polygon); m goes down four samples at a time, then one, each linear
+    programme starting from the last success's basis, until it fails.  A point
+    with a finite ``deadlines`` entry (s from the motion's start) keeps its
+    error within ``target`` bands from that instant on whatever m: the window's
+    samples from it, and its residual within ``residual`` bands grown by the
+    decay from the motion's end to the deadline.  ``quiet``: the residual of
+    other modes kept within a fraction of the band.  ``signed``: amplitudes in
+    [−1, 1] (as ``x = A + 1 ≥ 0``), the kinematic ``limits`` (rows ``M @ A``
+    within [lo, hi]) added where the solution breaks them.  Amplitudes at
+    delays 0 and D are kept ≥ 0.001 (the span stays D).
     """
-    C, sig, wd, _ = obj.correlations(D)
+    C, sig, wd, T_end = obj.correlations(D)
     n = support.size
     shift = 1.0 if signed else 0.0
     lp = _MinimaxLP(n, 1.0 + shift * n)
@@ -758,19 +798,34 @@ def _lp_sweep(obj: ShapedObjective, D: int, support: np.ndarray, signed: bool, t
         # G A − tau t ≤ c with A = x − shift
         lp.add(G, tau, c + shift * G.sum(axis=1))
 
-    nm = len(obj.modes)
-    th = 2.0 * np.pi * np.arange(_POLYGON) / _POLYGON
-    V0 = C[:, 0, support]
-    V1 = (C[:, 1, support] + sig[:, None] * V0) / wd[:, None]
-    poly = (np.cos(th)[None, :, None] * V0[:, None] + np.sin(th)[None, :, None] * V1[:, None])
-    scale = nm * target / (residual * obj.band * math.cos(math.pi / _POLYGON))
-    rows(poly.reshape(-1, n) * scale, 1.0, 0.0)
+    P, nm = len(obj.points), len(obj.modes)
+    mm = np.ones(P, bool) if minimax is None else np.asarray(minimax, bool)
+    dl = np.full(P, math.inf) if deadlines is None else np.asarray(deadlines, float)
+    cos_p = math.cos(math.pi / _POLYGON)
+    poly = _phasor_polygon(C, sig, wd, support).reshape(P, nm, _POLYGON, n)
+    scale = nm * target / (residual * obj.band * cos_p)
+    rows(poly[mm].reshape(-1, n) * scale, 1.0, 0.0)
     ends = np.zeros((2, n))
     ends[0, 0] = ends[1, -1] = -1.0
     rows(ends, 0.0, -1e-3)
+    if quiet is not None:
+        Cq, sq, wq, _ = quiet.objective.correlations(D)
+        q = _phasor_polygon(Cq, sq, wq, support) / (quiet.bound[:, None, None] * cos_p)
+        rows(q.reshape(-1, n), 0.0, 1.0)
+    win = None
+    sig_p = sig.reshape(P, nm).min(axis=1)
+    for p in np.flatnonzero(np.isfinite(dl)):
+        grow = math.exp(float(sig_p[p]) * max(0.0, float(dl[p]) - T_end))
+        rows(poly[p].reshape(-1, n) * nm / (residual * obj.band * cos_p * grow), 0.0, 1.0)
+        k_p = int(math.ceil((float(dl[p]) + obj.sc.move.t_start) / obj.h - 1e-9))
+        if win is None:
+            win = obj.window(D)
+        if k_p <= win.k_end:
+            G = win.E[p, support, max(k_p, win.k_w) - win.k_w:].T / (obj.band * target)
+            rows(np.vstack([G, -G]), 0.0, 1.0)
     # first the motion's end alone (every copy landed: the error is the modes' deflection),
     # from the final states: a span that cannot settle within the motion costs no window
-    nm_rows = C[:, 0, support].reshape(len(obj.points), nm, n).sum(axis=1) / obj.band
+    nm_rows = C[:, 0, support].reshape(P, nm, n).sum(axis=1)[mm] / obj.band
     rows(np.vstack([nm_rows, -nm_rows]), 1.0, 0.0)
     if not lp.solve() or lp.t > target:
         return None
@@ -780,7 +835,7 @@ def _lp_sweep(obj: ShapedObjective, D: int, support: np.ndarray, signed: bool, t
     step, m, snap = 4, win.k_end, None
     while m - 1 > win.k_w:
         m_lo = max(m - step, win.k_w + 1)
-        G = win.E[:, support, m_lo - win.k_w: m - win.k_w] / obj.band  # samples m_lo..m-1
+        G = win.E[mm][:, support, m_lo - win.k_w: m - win.k_w] / obj.band  # samples m_lo..m-1
         G = G.transpose(2, 0, 1).reshape(-1, n)
         if step > 1:
             snap = (lp.m, None if lp.basis is None else lp.basis.copy(), set(kept))
@@ -828,8 +883,9 @@ def optimal_shaper(sc: Scenario, session: Session, profile: str, T_F: tuple[floa
                    band: float, *, spans: tuple[int, ...], signed: bool = False,
                    points: tuple[Perturbation, ...] | None = None, margin: float = 0.05,
                    residual: float | None = None, max_impulses: int = 8, keep: int = 4,
-                   enough: int | None = None, objective: ShapedObjective | None = None
-                   ) -> ShaperTuning:
+                   enough: int | None = None, objective: ShapedObjective | None = None,
+                   minimax: np.ndarray | None = None, deadlines: np.ndarray | None = None,
+                   quiet: Quiet | None = None) -> ShaperTuning:
     """Design the shaper of each span whose exact worst-case settling time is least (LP).
 
     For a span D (the last delay, in samples), every shaper with whole-sample
@@ -893,13 +949,23 @@ def optimal_shaper(sc: Scenario, session: Session, profile: str, T_F: tuple[floa
         Stop once this many spans (taken in increasing order) have a design.
     objective : ShapedObjective, optional
         One already built for this base and set (its caches are shared).
+    minimax : ndarray of bool, optional
+        The points (of ``points``) whose worst-case settling is minimised;
+        default every point.
+    deadlines : ndarray, optional
+        Per point, an instant (s from the motion's start) from which its error
+        must stay within the band whatever the rest (``inf``: none): the
+        yardstick of a graceful design (:mod:`harness.tuning.graceful`).
+    quiet : Quiet, optional
+        Modes whose residual must stay within a fraction of the band (the
+        unmodelled modes the design assumes).
 
     Returns
     -------
     ShaperTuning
-        ``estimate`` is the exact worst-case settling time over the set in
-        the band itself (not the margin's); ``candidates`` one design per
-        span that has one, best first.
+        ``estimate`` is the exact worst-case settling time over the
+        ``minimax`` points in the band itself (not the margin's);
+        ``candidates`` one design per span that has one, best first.
 
     Raises
     ------
@@ -941,7 +1007,8 @@ def optimal_shaper(sc: Scenario, session: Session, profile: str, T_F: tuple[floa
                   limits: tuple[tuple[np.ndarray, float, float], ...] = limits
                   ) -> tuple[int, np.ndarray, float] | None:
             sub = tuple((M[:, sup], lo, hi) for M, lo, hi in limits)
-            return _lp_sweep(obj, D, sup, signed, target, residual, sub)
+            return _lp_sweep(obj, D, sup, signed, target, residual, sub, minimax, deadlines,
+                             quiet)
 
         # every second delay, then the neighbours of those used, then the largest impulses
         sup = np.unique(np.r_[np.arange(0, D + 1, 2), D])
@@ -971,9 +1038,10 @@ def optimal_shaper(sc: Scenario, session: Session, profile: str, T_F: tuple[floa
                           or np.min((M[:, list(delays)] @ amps - lo) / max(abs(lo), abs(hi)))
                           < -1e-9 for M, lo, hi in limits):
             continue  # the rounding of the sum broke a bound
-        worst, _ = obj.settling_times(amps[:, None], [delays])
+        _, each = obj.settling_times(amps[:, None], [delays])
         amp, _, T = obj.residuals(amps[:, None], delays)
-        found.append((float(worst[0, 0]), spec, float(amp.sum(axis=1).max()), T))
+        on = slice(None) if minimax is None else np.asarray(minimax, bool)
+        found.append((float(each[on, 0, 0].max()), spec, float(amp.sum(axis=1)[on].max()), T))
     if not found:
         raise ValueError(f"{sc.name}: no {name} shaper of span {sorted(spans)} samples settles "
                          f"within the motion at every point")
