@@ -162,7 +162,7 @@ def note(text: str) -> None:
     print(f"djl-fmu: note: {text}", file=sys.stderr, flush=True)
 
 
-def uncertainty_option(uncertainty: str | None, map_error: float | None) -> str | None:
+def uncertainty_option(text: str | None, map_error: float | None) -> str | None:
     """Return ``--uncertainty`` with the deprecated ``--map-error E`` read into it, once.
 
     ``--map-error E`` is ``--uncertainty map_scale=E``: given alone, it becomes that (and
@@ -171,7 +171,7 @@ def uncertainty_option(uncertainty: str | None, map_error: float | None) -> str 
 
     Parameters
     ----------
-    uncertainty : str, optional
+    text : str, optional
         The ``--uncertainty`` value.
     map_error : float, optional
         The ``--map-error`` value.
@@ -189,11 +189,11 @@ def uncertainty_option(uncertainty: str | None, map_error: float | None) -> str 
     """
     e = check_map_error_option(map_error)
     if e is None:
-        return uncertainty
+        return text
     try:
-        given = uncertainty_items(uncertainty).get("map_scale")
+        given = uncertainty_items(text).get("map_scale")
     except ValueError as err:
-        raise CommandError(2, f"--uncertainty {uncertainty!r}: {err}") from None
+        raise CommandError(2, f"--uncertainty {text!r}: {err}") from None
     try:
         resolve_alias(("--uncertainty map_scale", given), ("--map-error", e))
     except ValueError as err:
@@ -201,7 +201,7 @@ def uncertainty_option(uncertainty: str | None, map_error: float | None) -> str 
                               f"map_scale=E)") from None
     note(f"--map-error is deprecated: write --uncertainty map_scale={e!r} instead (read as "
          f"that)")
-    return f"{uncertainty},map_scale={e!r}" if uncertainty else f"map_scale={e!r}"
+    return f"{text},map_scale={e!r}" if text else f"map_scale={e!r}"
 
 
 def apply_uncertainty(scenarios: Sequence[Any], text: str | None) -> list[Any]:

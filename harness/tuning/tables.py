@@ -581,7 +581,7 @@ def _run_on(sc: Scenario, kind: str, points: list[Point], total: int, bs: int, e
 # --------------------------------------------------------------- the header
 
 
-def _uncertainty(sc: Scenario) -> str:
+def _uncertainty_text(sc: Scenario) -> str:
     u = sc.uncertainty
     return (f"{u.describe()} (robust tuning: the {len(u.tuning_set())}-point tuning set; the "
             f"worst_* columns: the {len(u.scoring_set())}-point scoring set)")
@@ -622,7 +622,7 @@ def _header(sc: Scenario, kind: str, n: int, total: int) -> list[str]:
         f"djl_method_meaning: {METHOD_MEANINGS[cmp.djl_tuning]}",
         f"jl_method: {cmp.jl_tuning}",
         f"jl_method_meaning: {METHOD_MEANINGS[cmp.jl_tuning]}",
-        f"uncertainty: {_uncertainty(sc)}; the worst_* columns are the largest residual "
+        f"uncertainty: {_uncertainty_text(sc)}; the worst_* columns are the largest residual "
         f"over the scoring set, for every method",
         f"map_error: {sc.uncertainty.map_scale:g}",
         "damping_factors: " + (f"{sc.uncertainty.damping[0]:g}..{sc.uncertainty.damping[1]:g}"
