@@ -49,9 +49,10 @@ def per_sweep(name: str, every: int) -> None:
             rob = tune_profile(s, case, "DJL-robust")
             t2 = time.perf_counter()
             pap = tune_profile(s, case, "DJL")
-            from harness.robustness import WORST_ERRORS, map_error_residuals
+            from harness.robustness import map_error_residuals
 
-            wp = float(np.max(map_error_residuals(case, s, "DJL", pap.T_F, WORST_ERRORS)))
+            wp = float(np.max(map_error_residuals(case, s, "DJL", pap.T_F,
+                                                  case.uncertainty.worst_errors())))
             t_opt.append(t1 - t0)
             t_rob.append(t2 - t1)
             r_opt.append(opt.search.nominal / opt.search.jl_nominal)

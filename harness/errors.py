@@ -5,20 +5,21 @@ so a script can catch them all with one ``except``; each also keeps the
 built-in base its callers already catch (``ValueError`` for bad input,
 ``RuntimeError`` for a failure while running).  Where each is raised:
 
-========================  ===========================  ========================================
-error                     built-in base                raised by
-========================  ===========================  ========================================
-``ScenarioError``         ValueError                   :mod:`harness.scenario` (file, key, value)
-``FMUError``              RuntimeError                 :mod:`harness.fmu.runner` (an FMI call)
-``BuildError``            RuntimeError                 :mod:`harness.fmu.build` (compiler, sources)
-``PlanError``             ValueError                   :mod:`harness.simulation.fast_axis`
-``ExecutorError``         ValueError                   :mod:`harness.executors` (workers, cluster)
-``BatchError``            RuntimeError                 a map or a table of moves did not complete
-``MoveError``             RuntimeError                 one move of such a batch (names the move)
-``CommandError``          --                           :mod:`harness.commands` (exit status)
-``RuckigMissingError``    ImportError                  :mod:`harness.peers.ruckig_ref`
-``EngineMissingError``    ImportError                  :mod:`harness.compiled` (engine not built)
-========================  ===========================  ========================================
+==========================  ==============  ============================================
+error                       built-in base   raised by
+==========================  ==============  ============================================
+``ScenarioError``           ValueError      :mod:`harness.scenario` (file, key, value)
+``FMUError``                RuntimeError    :mod:`harness.fmu.runner` (an FMI call)
+``BuildError``              RuntimeError    :mod:`harness.fmu.build` (compiler, sources)
+``PlanError``               ValueError      :mod:`harness.simulation.fast_axis`
+``ExecutorError``           ValueError      :mod:`harness.executors` (workers, cluster)
+``BatchError``              RuntimeError    a map or a table of moves did not complete
+``MoveError``               RuntimeError    one move of such a batch (names the move)
+``CommandError``            --              :mod:`harness.commands` (exit status)
+``RuckigMissingError``      ImportError     :mod:`harness.peers.ruckig_ref`
+``EngineMissingError``      ImportError     :mod:`harness.compiled` (engine not built)
+``DeprecatedAliasWarning``  FutureWarning   :mod:`harness.scenario` (a warning)
+==========================  ==============  ============================================
 
 The names that the earlier modules used for the batch errors stay available:
 ``WorkspaceMapError`` / ``MapError`` (:mod:`harness.workspace`) and
@@ -27,7 +28,8 @@ The names that the earlier modules used for the batch errors stay available:
 
 from __future__ import annotations
 
-__all__ = ["BatchError", "BuildError", "CommandError", "HarnessError", "MoveError"]
+__all__ = ["BatchError", "BuildError", "CommandError", "DeprecatedAliasWarning", "HarnessError",
+           "MoveError"]
 
 
 class HarnessError(Exception):
@@ -63,3 +65,16 @@ class CommandError(HarnessError):
     def __init__(self, status: int, message: str) -> None:
         super().__init__(message)
         self.status = status
+
+
+class DeprecatedAliasWarning(HarnessError, FutureWarning):  # noqa: N818 - a warning
+    """A deprecated spelling of a setting was used: its value was read as the new key's.
+
+    ``[compare] map_error`` / ``damping`` of a scenario (:mod:`harness.scenario`) are
+    read as ``[uncertainty] map_scale`` / ``damping``
+    (:func:`harness.uncertainty.resolve_alias`); the message says what to write
+    instead.  A warning (shown once per place by Python's default filter); the
+    commands print each as one line on stderr (``djl-fmu: note: ...``).  It derives
+    from :class:`HarnessError` too: with warnings turned into errors, one ``except``
+    still catches everything the harness raises.
+    """

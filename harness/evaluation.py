@@ -29,7 +29,6 @@ from .simulation.session import Session
 from .simulation.shaped_axis import ShaperSpec
 from .tuning.rule import TuningResult
 from .tuning.tune import jerk_times, tune_profile
-from .uncertainty import DEFAULT_ERRORS, WORST_ERRORS, WORST_SPAN
 
 __all__ = ["ROBUSTNESS_MODES", "ProfileMetrics", "peaks", "profile_metrics", "run_case",
            "score_uncertainty"]
@@ -155,7 +154,7 @@ def _robustness_mode(robustness: bool | str | None) -> str | None:
 def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True,
              robustness: bool | str | None = False,
              robustness_session: Session | None = None,
-             uncertainty: bool = True, recommend: bool = False) -> ScenarioResult:
+             score_worst_cases: bool = True, recommend: bool = False) -> ScenarioResult:
     """Tune, co-simulate and measure every profile of a single-move scenario.
 
     Parameters
@@ -168,20 +167,22 @@ def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True,
         Keep the time series (False in sweeps, to save memory).
     robustness : bool or {"worst", "curves"}
         Residual of each profile when the whole mode map is off by a factor
-        1 + e (jerk times tuned on the nominal map; :mod:`harness.robustness`):
+        1 + e (jerk times tuned on the nominal map; :mod:`harness.robustness`),
+        over the span of the scenario's uncertainty, ``m = sc.uncertainty.map_scale``:
 
         * False (default): not computed;
-        * ``"worst"``: only the worst case over e in ±10 % (21 points, 1 %
-          apart), stored on each profile as ``worst_residual_10pct``;
-        * ``"curves"`` or True: the curves over e in ±20 % (41 points, 1 %
-          apart) kept on the result as ``.robustness``
+        * ``"worst"``: only the worst case over e in ±m (21 points; 1 % apart
+          at the default m = 0.1), stored on each profile as
+          ``worst_map_residual``;
+        * ``"curves"`` or True: the curves over e in ±2m (41 points) kept on
+          the result as ``.robustness``
           (:class:`harness.robustness.RobustnessResult`), and the worst case
-          over ±10 % taken from them (the same 21 points).
+          over ±m taken from them (the same 21 points).
     robustness_session : Session, optional
         Session for the map-error runs (default: ``session``); e.g. the fast
         engine's when ``session`` drives the FMUs (same results, see
         ``tests/test_engine.py``), since they are many.
-    uncertainty : bool
+    score_worst_cases : bool
         Score every profile over the scenario's uncertainty (its scoring set,
         :func:`score_uncertainty`): worst residual, worst-case settling time in
         the case's band (on by default).
@@ -231,11 +232,12 @@ def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True,
     curves = None
     worst: dict[str, float] = {}
     rs = session if robustness_session is None else robustness_session
+    unc = sc.uncertainty  # the span of the map-error curves and of their worst case
     if mode == "curves":
-        curves = robustness_curves(sc, rs, jerk, errors=DEFAULT_ERRORS)
-        worst = curves.worst(WORST_SPAN)
+        curves = robustness_curves(sc, rs, jerk, errors=unc.curve_errors())
+        worst = curves.worst(unc.map_scale)
     elif mode == "worst":
-        worst = robustness_curves(sc, rs, jerk, errors=WORST_ERRORS).worst(WORST_SPAN)
+        worst = robustness_curves(sc, rs, jerk, errors=unc.worst_errors()).worst(unc.map_scale)
 
     rec = None
     shapers: dict[str, ShaperSpec | None] = {}
@@ -247,16 +249,16 @@ def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True,
                                           shaper=rec.best.shaper)
         tunings["recommended"] = None
         if mode is not None:  # its map-error residuals like the others' (curve or worst case)
-            errs = DEFAULT_ERRORS if curves is not None else WORST_ERRORS
+            errs = curves.errors if curves is not None else unc.worst_errors()
             res_e = np.asarray(rs.map_error_residuals(
                 sc, rec.best.profile, rec.best.T_F, errs, shaper=rec.best.shaper), float)
             if curves is not None:
                 curves.residual["recommended"] = res_e
                 curves.T_F["recommended"] = tuple(rec.best.T_F)
-            sel = np.abs(np.asarray(errs)) <= WORST_SPAN + 1e-12
+            sel = np.abs(np.asarray(errs)) <= unc.map_scale + 1e-12
             worst["recommended"] = float(np.max(res_e[sel]))
     outcomes = {}
-    scoring = sc.uncertainty.scoring_set() if uncertainty else None
+    scoring = unc.scoring_set() if score_worst_cases else None
     for prof, run in runs.items():
         met = profile_metrics(run, band, paper_band=paper_band)
         if scoring is not None:
@@ -266,13 +268,13 @@ def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True,
         outcomes[prof] = ProfileOutcome(
             prof, run if keep_runs else None, tunings[prof], met, run.T_F, run.z_v_max,
             run.z_synced, plan_info=dict(run.plan_info),
-            worst_residual_10pct=worst.get(prof, math.nan),
+            worst_map_residual=worst.get(prof, math.nan),
             method=(f"{rec.best.family}: {rec.best.label(sc.simulation.Te)}"
                     if prof == "recommended" and rec is not None
                     else _method(prof, jerk[prof], sc.simulation.Te)),
             fmu_parameters=params, z_fmu_parameters=session.z_move_params(sc, run.z_v_max))
     return ScenarioResult(sc, outcomes, band, source, paper_band=paper_band, robustness=curves,
-                          uncertainty=scoring.label if scoring is not None else "",
+                          scoring_label=scoring.label if scoring is not None else "",
                           recommendation=rec)
 
 

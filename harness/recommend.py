@@ -566,7 +566,7 @@ def recommend(sc: Scenario, session: Session, band: float, *,
     scd = dataclasses.replace(sc, compare=dataclasses.replace(
         sc.compare, djl_tuning="paper", DJL_T_F=None))
     paper = tune_profile(fast, scd, "DJL")
-    opts = dataclasses.replace(sc.compare.tuning_options(), jerk_limit="JL")
+    opts = dataclasses.replace(sc.tuning_options(), jerk_limit="JL")
     djl = tune_optimal(sc, fast, "DJL", "robust", paper, jl, opts)
     T_djl = tuple(djl.T_F)
     cands.append(_measure(sc, fast, "DJL (robust)", "DJL", T_djl, None, band, "robust search"))

@@ -41,6 +41,7 @@ from .files import OutputSet
 from .peers.compare import compare_scenario
 from .peers.ruckig_ref import COMPARE_HINT, ruckig_available
 from .scenario import load_scenario
+from .uncertainty import span_text
 
 _CSS = """
 body { font-family: -apple-system, "Segoe UI", Helvetica, Arial, sans-serif; margin: 2em auto;
@@ -259,7 +260,11 @@ def peers_section(settings: Settings,
         return (f"<h2 id='peers'>Peers side by side</h2>\n<p class='skipped'>{_e(PEERS_SKIPPED)}"
                 "</p>")
     errors = np.linspace(-0.4, 0.4, 9 if settings.fast else 41)
-    map_errors = np.linspace(-0.2, 0.2, 9 if settings.fast else 41)
+    scenarios = [load_scenario(name) for name in ("X", "Y")]
+    # the map errors and their worst case: each scenario's uncertainty (+/-2 x map_scale,
+    # the worst case over +/-map_scale; the same for X and Y, +/-10 % by default)
+    spans = sorted({span_text(sc.uncertainty.map_scale) for sc in scenarios})
+    pct = spans[0] if len(spans) == 1 else "map_scale"
     parts = [
         "<h2 id='peers'>Peers side by side: which law ends the motion soonest within the "
         "tolerance?</h2>",
@@ -275,8 +280,8 @@ def peers_section(settings: Settings,
         "Motion time is also given relative to the time-optimal JL with the same limits; "
         "residual (free-oscillation amplitude at the end) in % of AL; settling into the "
         "scenario's band, shared by every method (default: 1 % of AL's residual); "
-        "worst±10%: the largest residual when the whole map f(z) of the time-varying plant "
-        "is off by 1 + e, |e| ≤ 10 %, every reference planned on the nominal map. "
+        f"worst±{pct}%: the largest residual when the whole map f(z) of the time-varying "
+        f"plant is off by 1 + e, |e| ≤ {pct} %, every reference planned on the nominal map. "
         "Each table ends with the verdict (who leaves the least residual, who settles "
         "first, who has the smallest worst case). "
         "The figures show the residual against an error on the mode frequency: left on a "
@@ -290,12 +295,14 @@ def peers_section(settings: Settings,
 
     import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
-    for i, name in enumerate(("X", "Y")):
-        sc = load_scenario(name).with_fmu(
-            None if settings.fmu is None else Path(settings.fmu), settings.fmi_version)
+    for i, sc in enumerate(scenarios):
+        name = sc.name
         try:
+            sc = sc.with_fmu(None if settings.fmu is None else Path(settings.fmu),
+                             settings.fmi_version)
             # the physical limit (a linear programme, ~30 s a scenario until cached) in
             # the full report only; --fast is the quick look
+            map_errors = sc.uncertainty.curve_errors(9 if settings.fast else 41)
             cmp = compare_scenario(sc, errors=errors, map_errors=map_errors,
                                    bound=not settings.fast)
             fig = cmp.plot_robustness()

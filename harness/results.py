@@ -29,6 +29,7 @@ from .files import write_csv
 from .metrics import PAPER_BAND_LABEL, Table2Stats, change_percent, percent_of, table2_stats
 from .simulation.plots import PEAK_LABEL, plot_runs
 from .tables import SIGNAL_COLUMNS, TableMixin, columns_of, mat_variables, to_pandas
+from .uncertainty import span_text
 
 __all__ = [
     "ProfileOutcome",
@@ -43,8 +44,34 @@ MOVE_KEY_FIELDS = ("N_F", "motion_time", "v_reached", "a_reached", "d_reached", 
                    "x0", "z0", "z_distance", "z_v_max")
 """Fields of ``CoSimResult.plan_info`` that identify a planned move (compared exactly)."""
 
-WORST_LABEL = "Worst residual, map error +/-10 %"
-"""Label of the worst residual over a ±10 % map error (:mod:`harness.robustness`)."""
+WORST_PREFIX = "Worst residual, map error +/-"
+"""Start of the label of the worst residual over a map error (:func:`worst_label`)."""
+
+
+def worst_label(span: float) -> str:
+    """Label of the worst residual over a map error within ±``span`` (:mod:`harness.robustness`).
+
+    ``Worst residual, map error +/-10 %`` for the default map scale 0.1: every table
+    writes the run's (``scenario.uncertainty.map_scale``).
+    """
+    return f"{WORST_PREFIX}{span_text(span)} %"
+
+
+LEGACY_SPAN = 0.1
+"""The span the CSV columns ``residual_worst_map10_*`` and ``worst_residual_10pct_*`` are
+named after: they keep their names and hold the run's worst case (a legend says so when
+the run's map scale is another)."""
+
+
+def legacy_columns_note(span: float, columns: str) -> str:
+    """Return the legend's note that ``columns`` (named ``...10...``) hold the run's span.
+
+    Empty when the run's span is the one they are named after (:data:`LEGACY_SPAN`).
+    """
+    if span_text(span) == span_text(LEGACY_SPAN):
+        return ""
+    return (f" The CSV columns {columns} keep their names and hold this +/-{span_text(span)} % "
+            f"worst case.")
 
 
 @dataclass
@@ -70,9 +97,12 @@ class ProfileOutcome:
     plan_info : dict
         What the generators planned (``CoSimResult.plan_info``), kept when the
         run is dropped: identifies the move (:attr:`move_key`).
-    worst_residual_10pct : float
-        Largest residual over a map error within ±10 % (m), jerk times tuned on
+    worst_map_residual : float
+        Largest residual over a map error within ± the scenario's map scale
+        (``uncertainty.map_scale``, 10 % by default) (m), jerk times tuned on
         the nominal map (:mod:`harness.robustness`); NaN if not computed.
+        :attr:`worst_residual_10pct` is its earlier name (the CSV keeps
+        ``residual_worst_map10_m``).
     method : str
         The profile in words (its jerk times, its shaper).
     fmu_parameters, z_fmu_parameters : dict
@@ -88,10 +118,15 @@ class ProfileOutcome:
     z_v_max: float
     z_synced: bool
     plan_info: dict[str, Any] = field(default_factory=dict)
-    worst_residual_10pct: float = math.nan
+    worst_map_residual: float = math.nan
     method: str = ""
     fmu_parameters: dict[str, Any] = field(default_factory=dict)
     z_fmu_parameters: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def worst_residual_10pct(self) -> float:
+        """The earlier name of :attr:`worst_map_residual` (over the run's map scale)."""
+        return self.worst_map_residual
 
     @property
     def move_key(self) -> tuple[Any, ...] | None:
@@ -144,8 +179,9 @@ class ScenarioResult(TableMixin):
     robustness : RobustnessResult, optional
         Residual against a map error, in the time-varying plant
         (``run_case(..., robustness="curves")``).
-    uncertainty : str
-        The scoring set the worst cases are taken over (empty: not scored).
+    scoring_label : str
+        The scoring set the worst cases are taken over (empty: not scored);
+        the uncertainty itself is ``scenario.uncertainty``.
     recommendation : Recommendation, optional
         How the ``recommended`` profile was chosen (:mod:`harness.recommend`).
     """
@@ -156,7 +192,7 @@ class ScenarioResult(TableMixin):
     band_source: str
     paper_band: float = math.nan
     robustness: Any = None
-    uncertainty: str = ""
+    scoring_label: str = ""
     recommendation: Any = None
 
     # ------------------------------------------------------------ numbers
@@ -167,7 +203,7 @@ class ScenarioResult(TableMixin):
         ``name`` is a field of :class:`~harness.evaluation.ProfileMetrics`
         (``residual``, ``residual_peak``, ``free_amplitude``, ``motion_time``,
         ``rise_time``, ``settling_time``, ``settling_time_paper``) or
-        ``worst_residual_10pct``.
+        ``worst_map_residual`` (earlier name ``worst_residual_10pct``).
         """
         p = self.profiles[profile]
         if hasattr(p.metrics, name):
@@ -216,12 +252,17 @@ class ScenarioResult(TableMixin):
     @property
     def has_uncertainty(self) -> bool:
         """Whether every profile was scored over the scenario's uncertainty."""
-        return bool(self.uncertainty)
+        return bool(self.scoring_label)
+
+    @property
+    def worst_span(self) -> float:
+        """The span of the map-error worst case: the scenario's ``uncertainty.map_scale``."""
+        return float(self.scenario.uncertainty.map_scale)
 
     @property
     def has_worst(self) -> bool:
-        """Whether the worst residual over a ±10 % map error was computed."""
-        return any(math.isfinite(p.worst_residual_10pct) for p in self.profiles.values())
+        """Whether the worst residual over a map error within ±:attr:`worst_span` was computed."""
+        return any(math.isfinite(p.worst_map_residual) for p in self.profiles.values())
 
     def move_key(self, profiles: Sequence[str] | None = None) -> tuple[Any, ...] | None:
         """Return the moves planned for ``profiles`` (default: every profile), exactly.
@@ -299,7 +340,8 @@ class ScenarioResult(TableMixin):
             rows.append((f"Settling time [s] ({PAPER_BAND_LABEL})", "settling_time_paper", 1.0,
                          True))
         if self.has_worst:
-            rows.append((f"{WORST_LABEL} [mm]", "worst_residual_10pct", 1e3, False))
+            rows.append((f"{worst_label(self.worst_span)} [mm]", "worst_map_residual", 1e3,
+                         False))
         if self.has_uncertainty:
             rows += [("Worst residual, uncertainty [mm]", "residual_worst", 1e3, False),
                      ("Worst-case settling time [s] (same band)", "settling_time_worst", 1.0,
@@ -341,10 +383,14 @@ class ScenarioResult(TableMixin):
         if self.has_worst:
             rob = self.robustness.label if self.robustness is not None else \
                 "time-varying plant, whole map scaled by 1 + e"
-            out.append(f"{WORST_LABEL}: largest residual for every f(z) x (1 + e), |e| <= 10 %, "
-                       f"jerk times tuned on the nominal map ({rob}).")
+            span = self.worst_span
+            out.append(f"{worst_label(span)}: largest residual for every f(z) x (1 + e), "
+                       f"|e| <= {span_text(span)} %, jerk times tuned on the nominal map "
+                       f"({rob})."
+                       + legacy_columns_note(span, "residual_worst_map10_m, "
+                                                   "residual_worst_map10_pct_of_AL"))
         if self.has_uncertainty:
-            out.append(f"Uncertainty: {self.uncertainty}; the worst cases are over it, every "
+            out.append(f"Uncertainty: {self.scoring_label}; the worst cases are over it, every "
                        f"reference planned on the nominal map, the settling band fixed.")
         if "recommended" in self.profiles:
             rec = self.profiles["recommended"]
@@ -361,8 +407,8 @@ class ScenarioResult(TableMixin):
             if self.has_paper_settling:
                 parts.append(f"{_pct(ch['settling_paper'], True)} ({PAPER_BAND_LABEL})")
             if self.has_worst:
-                parts.append(f"worst residual over +/-10 % map error "
-                             f"{_pct(ch['worst_residual_10pct'], True)}")
+                parts.append(f"worst residual over +/-{span_text(self.worst_span)} % map "
+                             f"error {_pct(ch['worst_residual_10pct'], True)}")
             out.append("DJL compared with JL: " + ", ".join(parts) + ".")
         return "\n".join(out)
 
@@ -411,14 +457,15 @@ class ScenarioResult(TableMixin):
                 "residual_peak_m": met.residual_peak,
                 "settling_time_paper_band_s": met.settling_time_paper,
                 "paper_band_m": self.paper_band,
-                "residual_worst_map10_m": p.worst_residual_10pct,
-                "residual_worst_map10_pct_of_AL": self.relative("worst_residual_10pct", n),
+                # named after the default +/-10 %: the run's span (worst_span), names kept
+                "residual_worst_map10_m": p.worst_map_residual,
+                "residual_worst_map10_pct_of_AL": self.relative("worst_map_residual", n),
                 # the uncertainty and the peaks (issue 18)
                 "residual_nominal_m": met.residual,
                 "residual_worst_m": met.residual_worst,
                 "settling_time_worst_s": met.settling_time_worst,
                 "worst_point": met.worst_point,
-                "uncertainty": self.uncertainty,
+                "uncertainty": self.scoring_label,
                 "v_peak_m_s": met.v_peak,
                 "a_peak_m_s2": met.a_peak,
                 "j_peak_m_s3": met.j_peak,
@@ -549,10 +596,13 @@ TABLE2_METRICS: dict[str, tuple[str, str]] = {
     "residual": ("residual", "Residual vibrations"),
     "settling": ("settling_time", "Settling times"),
     "settling_paper": ("settling_time_paper", f"Settling times ({PAPER_BAND_LABEL})"),
-    "worst_residual_10pct": ("worst_residual_10pct",
-                             f"{WORST_LABEL} (time-varying plant, whole map x (1 + e))"),
+    "worst_residual_10pct": ("worst_map_residual",
+                             "{worst} (time-varying plant, whole map x (1 + e))"),
 }
-"""Quantities of Table 2: key → (metric of :meth:`ScenarioResult.metric`, label)."""
+"""Quantities of Table 2: key → (metric of :meth:`ScenarioResult.metric`, label).
+
+The key ``worst_residual_10pct`` (table2.csv's ``quantity``, kept) is the worst case over
+the run's map scale; its label's ``{worst}`` is :func:`worst_label` of the sweeps' span."""
 
 
 # ------------------------------------------------------------------ sweeps
@@ -670,7 +720,8 @@ class SweepResult(TableMixin):
 
         Keys: ``residual``, ``settling`` (in the cases' band), ``settling_paper``
         (in the paper's band, DJL's residual), ``worst_residual_10pct`` (worst
-        residual over a ±10 % map error; n = 0 when not computed).
+        residual over a map error within ± the scenario's map scale, 10 % by
+        default; n = 0 when not computed).
         """
         return {k: table2_stats(v) for k, v in self.changes_all(distinct=True).items()}
 
@@ -688,7 +739,8 @@ class SweepResult(TableMixin):
             ``residual_pct_of_JL_mean`` / ``_max`` (its residual as % of JL's),
             ``worse_than_JL`` (moves where it leaves more than JL, to 1e-12),
             ``worst_pct_of_JL_mean`` / ``_max`` (its worst residual over a
-            ±10 % map error as % of JL's worst; NaN if not computed),
+            map error within ± the map scale as % of JL's worst; NaN if not
+            computed),
             ``worst_below_DJL`` (moves where its worst case is below the
             paper-rule DJL's; NaN without DJL), ``motion_time_change_pct_mean``
             / ``_max`` (motion time against JL's), ``n`` (distinct moves).
@@ -698,10 +750,10 @@ class SweepResult(TableMixin):
                         for c in cases])
         worse = sum(c.metric(variant, "residual") > c.metric("JL", "residual") * (1 + 1e-12)
                     for c in cases)
-        w = np.array([c.metric(variant, "worst_residual_10pct")
-                      / c.metric("JL", "worst_residual_10pct") for c in cases])
-        below = (sum(c.metric(variant, "worst_residual_10pct")
-                     < c.metric("DJL", "worst_residual_10pct") for c in cases)
+        w = np.array([c.metric(variant, "worst_map_residual")
+                      / c.metric("JL", "worst_map_residual") for c in cases])
+        below = (sum(c.metric(variant, "worst_map_residual")
+                     < c.metric("DJL", "worst_map_residual") for c in cases)
                  if cases and "DJL" in cases[0].profiles else math.nan)
         mt = np.array([c.relative("motion_time", variant, "JL", change=True) for c in cases])
 
@@ -781,7 +833,8 @@ class SweepResult(TableMixin):
         if np.isfinite(ch["settling_paper"]).any() and "paper" not in self.band_label:
             bars.append(("settling_paper", f"settling time ({PAPER_BAND_LABEL})", "tab:orange"))
         if np.isfinite(ch["worst_residual_10pct"]).any():
-            bars.append(("worst_residual_10pct", "worst residual, map error +/-10 %", "tab:green"))
+            bars.append(("worst_residual_10pct", "worst residual, map error +/-"
+                         f"{span_text(self.scenario.uncertainty.map_scale)} %", "tab:green"))
         wb = 0.8 / len(bars)
         for i, (k, lab, col) in enumerate(bars):
             ax2.bar(idx - 0.4 + wb * (i + 0.5), ch[k], width=wb, color=col, label=lab)
@@ -818,8 +871,17 @@ def _table2_sections(sweeps: Sequence[SweepResult]) -> list[tuple[str, str]]:
                 ("settling", f"Settling times ({band})")]
     if all(s.band_label != PAPER_BAND_LABEL for s in sweeps):
         sections.append(("settling_paper", TABLE2_METRICS["settling_paper"][1]))
-    sections.append(("worst_residual_10pct", TABLE2_METRICS["worst_residual_10pct"][1]))
+    sections.append(("worst_residual_10pct", TABLE2_METRICS["worst_residual_10pct"][1].format(
+        worst=WORST_PREFIX + _spans(sweeps))))
     return [(k, h) for k, h in sections if any(st[k].n > 0 for st in stats)]
+
+
+def _spans(sweeps: Sequence[SweepResult]) -> str:
+    """Return the sweeps' map-error span for a label: ``10 %``, or ``10 % (X), +/-15 % (Y)``."""
+    spans = [span_text(s.scenario.uncertainty.map_scale) for s in sweeps]
+    if len(set(spans)) <= 1:
+        return f"{spans[0] if spans else span_text(LEGACY_SPAN)} %"
+    return ", +/-".join(f"{x} % ({s.scenario.name})" for x, s in zip(spans, sweeps, strict=True))
 
 
 def format_table2(sweeps: Sequence[SweepResult]) -> str:
@@ -827,7 +889,8 @@ def format_table2(sweeps: Sequence[SweepResult]) -> str:
 
     Each distinct move is counted once; the settling times are given in the
     sweeps' band and, separately, in the paper's band (DJL's residual), each
-    labelled; the worst residual over a ±10 % map error when computed.
+    labelled; the worst residual over a map error within ± the sweeps' map scale
+    (``uncertainty.map_scale``, 10 % by default) when computed.
 
     Parameters
     ----------
@@ -866,7 +929,8 @@ def format_table2(sweeps: Sequence[SweepResult]) -> str:
                 ("residual_pct_of_JL_mean", "residual, % of JL's: mean", ".2f"),
                 ("residual_pct_of_JL_max", "  largest", ".2f"),
                 ("worse_than_JL", "moves leaving more than JL", ".0f"),
-                ("worst_pct_of_JL_mean", "worst over +/-10 % map, % of JL's", ".1f"),
+                ("worst_pct_of_JL_mean", f"worst over +/-{_spans(sweeps)} map, % of JL's",
+                 ".1f"),
                 ("worst_pct_of_JL_max", "  largest", ".1f"),
                 ("worst_below_DJL", "worst case below paper-rule DJL's", ".0f"),
                 ("motion_time_change_pct_mean", "motion time vs JL, %: mean", "+.2f"),

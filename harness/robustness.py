@@ -11,8 +11,10 @@ ends, :func:`harness.metrics.residual_amplitude`) is computed for each e:
 
 * :func:`map_error_residuals` — one profile, an array of errors;
 * :func:`robustness` — every profile: a :class:`RobustnessResult` with the
-  curves, the worst case over ±10 % (:meth:`RobustnessResult.worst`), CSV rows
-  and a figure.
+  curves (by default over ±2·map_scale of the scenario's uncertainty,
+  :meth:`~harness.uncertainty.UncertaintySpec.curve_errors`), the worst case
+  over ±map_scale (:meth:`RobustnessResult.worst`), CSV rows and a figure
+  shading that span.
 
 This is not the stationary-mode check of :mod:`harness.peers.compare`
 (``djl-fmu compare``), where a single mode of *constant* frequency is off from
@@ -45,12 +47,9 @@ from .scenario import Scenario
 from .simulation.plots import COLORS
 from .simulation.session import Session
 from .tuning.rule import TuningResult
-from .uncertainty import DEFAULT_ERRORS, WORST_ERRORS, WORST_SPAN
+from .uncertainty import DEFAULT_UNCERTAINTY, span_text
 
 __all__ = [
-    "DEFAULT_ERRORS",
-    "WORST_ERRORS",
-    "WORST_SPAN",
     "RobustnessResult",
     "map_error_residuals",
     "robustness",
@@ -122,12 +121,22 @@ class RobustnessResult:
         The nominal scenario.
     T_F : dict of str to tuple
         Jerk times of each profile (s), tuned on the nominal map (None for AL).
+    span : float, optional
+        The worst case is over the errors within ±``span``: the map scale of the
+        scenario's uncertainty (default: ``scenario.uncertainty.map_scale``; without
+        a scenario, the default uncertainty's).
     """
 
     errors: np.ndarray
     residual: dict[str, np.ndarray]
     scenario: Any = None
     T_F: dict[str, tuple[float, ...] | None] = field(default_factory=dict)
+    span: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.span is None:
+            unc = getattr(self.scenario, "uncertainty", DEFAULT_UNCERTAINTY)
+            self.span = float(unc.map_scale)
 
     @property
     def label(self) -> str:
@@ -136,16 +145,19 @@ class RobustnessResult:
         plant = "plant with Z still" if still else "time-varying plant (Z moving)"
         return f"{plant}, whole map scaled by 1 + e"
 
-    def worst(self, span: float = WORST_SPAN) -> dict[str, float]:
+    def worst(self, span: float | None = None) -> dict[str, float]:
         """Largest residual of each profile over the errors within ±``span`` (m).
 
-        The maximum over the grid points with |e| ≤ span (1e-12 tolerance).
+        The maximum over the grid points with |e| ≤ span (1e-12 tolerance);
+        ``span`` defaults to :attr:`span` (the run's map scale).
 
         Raises
         ------
         ValueError
             If no grid point lies within the span.
         """
+        span = self.span if span is None else span
+        assert span is not None
         sel = np.abs(self.errors) <= span + 1e-12
         if not sel.any():
             raise ValueError(f"no map error within +/-{span:g} in {self.errors!r}")
@@ -174,8 +186,10 @@ class RobustnessResult:
                 })
         return out
 
-    def plot(self, title: str | None = None, span: float = WORST_SPAN):
+    def plot(self, title: str | None = None, span: float | None = None):
         """Residual against map error, one curve per profile, the ±``span`` band shaded.
+
+        ``span`` defaults to :attr:`span` (the run's map scale).
 
         Returns
         -------
@@ -183,10 +197,12 @@ class RobustnessResult:
         """
         import matplotlib.pyplot as plt  # deferred: matplotlib is heavy to import
 
+        span = self.span if span is None else span
+        assert span is not None
         fig, ax = plt.subplots(figsize=(9, 7))
         x = 100.0 * self.errors
         ax.axvspan(-100 * span, 100 * span, color="0.88", lw=0,
-                   label=f"+/-{100 * span:g} % (worst case)")
+                   label=f"+/-{span_text(span)} % (worst case)")
         try:
             worst = self.worst(span)
         except ValueError:
@@ -194,7 +210,7 @@ class RobustnessResult:
         for p, r in self.residual.items():
             lab = p
             if p in worst:
-                lab += f": worst over +/-{100 * span:g} % {worst[p] * 1e3:.3g} mm"
+                lab += f": worst over +/-{span_text(span)} % {worst[p] * 1e3:.3g} mm"
             ax.semilogy(x, np.maximum(r * 1e3, 1e-9), marker=".", color=COLORS.get(p), label=lab)
         ax.axvline(0.0, color="k", lw=0.6)
         ax.set_xlabel("map error e [%]: every f(z) of the plant x (1 + e); jerk times tuned "
@@ -214,7 +230,7 @@ class RobustnessResult:
 
 def robustness(sc: Scenario, session: Session,
                profiles: Mapping[str, TuningResult | Sequence[float] | float | None],
-               errors: Sequence[float] | np.ndarray = DEFAULT_ERRORS) -> RobustnessResult:
+               errors: Sequence[float] | np.ndarray | None = None) -> RobustnessResult:
     """Residual of every profile against a map error (the whole f(z) scaled by 1 + e).
 
     Parameters
@@ -227,14 +243,18 @@ def robustness(sc: Scenario, session: Session,
         Profile name → its jerk times tuned on the nominal map: a
         :class:`~harness.tuning.TuningResult`, four jerk times (s), one JL jerk
         time (s), or None (AL only).
-    errors : array_like
-        Map errors e (default −20 % … +20 %, 41 points).
+    errors : array_like, optional
+        Map errors e (default: the scenario's uncertainty's curves, ±2·map_scale in
+        41 points, :meth:`~harness.uncertainty.UncertaintySpec.curve_errors`:
+        −20 % … +20 % with the default map scale).
 
     Returns
     -------
     RobustnessResult
+        Its worst case is over ±map_scale of the scenario's uncertainty.
     """
-    e = np.asarray(errors, dtype=float).ravel()
+    e = np.asarray(sc.uncertainty.curve_errors() if errors is None else errors,
+                   dtype=float).ravel()
     T = {p: _jerk(p, v) for p, v in profiles.items()}
     res = {p: map_error_residuals(sc, session, p, T_F, e) for p, T_F in T.items()}
-    return RobustnessResult(e, res, sc, T)
+    return RobustnessResult(e, res, sc, T, span=sc.uncertainty.map_scale)

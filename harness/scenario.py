@@ -59,8 +59,6 @@ Format (all lengths in m, times in s, frequencies in Hz)::
     djl_tuning = "paper"            # DJL jerk times: "paper" (the rule above), "optimal"
                                     # (least residual), "robust" (least worst case)
     jl_tuning = "end"               # JL jerk time: "end" (period at the end), "optimal"
-    map_error = 0.1                 # robust: the map f(z) off by up to +/-10 %
-    damping = [0.5, 1.0, 2.0]       # robust, optional: damping ratios x these factors
     max_motion_time = "JL"          # optional: no longer than JL's motion (or a time in s)
     period_band = 0.5               # jerk times within +/-50 % of the local periods
     JL_T_F = 0.15                   # optional: impose the JL jerk time
@@ -72,7 +70,10 @@ Format (all lengths in m, times in s, frequencies in Hz)::
     z_shift = 0.05                  # the map shifted along z by up to +/-5 cm (default 0)
     damping = [0.5, 2.0]            # every damping ratio x 0.5 .. 2 (default: off)
     # robust tuning minimises over a coarse set of these, every table scores on a
-    # finer one (harness.uncertainty)
+    # finer one, and every worst case, curve and label uses map_scale (harness.uncertainty)
+    # Deprecated aliases, read as these keys (a note on stderr; both given and
+    # disagreeing: refused): [compare] map_error = E  (map_scale = E) and
+    # [compare] damping = [f1, f2, ...]  (damping = [min(f, 1), max(f, 1)])
 
     [sweep]                         # optional: run the grid of all combinations
     distance = [0.1, 0.2, 0.3]      # replaces move.distance
@@ -95,6 +96,7 @@ import difflib
 import itertools
 import math
 import sys
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from importlib import resources
@@ -113,7 +115,12 @@ from .fmu.runner import check_fmu_binary, check_fmu_variables, samples_per_step
 from .metrics import DEFAULT_SETTLE_BAND, SettleBand, parse_settle_band
 from .modemap import CantileverLaw, ConstantLaw, LinearLaw, ModeMap, ModeSpec, TableLaw
 from .tuning_options import DJL_METHODS, JL_METHODS, RULES, VARIANTS, TuningOptions
-from .uncertainty import DEFAULT_UNCERTAINTY, UncertaintySpec
+from .uncertainty import (
+    DEFAULT_UNCERTAINTY,
+    DeprecatedAliasWarning,
+    UncertaintySpec,
+    resolve_alias,
+)
 
 __all__ = [
     "CompareSpec",
@@ -252,15 +259,8 @@ class CompareSpec:
     DJL_T_F: tuple[float, float, float, float] | None = None
     djl_tuning: str = "paper"
     jl_tuning: str = "end"
-    map_error: float = 0.1
-    damping: tuple[float, ...] | None = None
     max_motion_time: float | str | None = None
     period_band: float = 0.5
-
-    def tuning_options(self) -> TuningOptions:
-        """Return the :class:`harness.tuning_options.TuningOptions` of this table."""
-        return TuningOptions(self.map_error, self.damping, self.max_motion_time,
-                             self.period_band)
 
 
 @dataclass(frozen=True)
@@ -396,6 +396,16 @@ class Scenario:
     def is_sweep(self) -> bool:
         """True when the scenario has a ``[sweep]`` table."""
         return self.sweep is not None
+
+    def tuning_options(self) -> TuningOptions:
+        """Return what the ``optimal`` / ``robust`` searches may do.
+
+        The map error and the damping range are the scenario's ``uncertainty``
+        (their only home); the bounds are ``[compare]``'s.
+        """
+        u, c = self.uncertainty, self.compare
+        return TuningOptions(u.map_scale, u.damping if u.active["damping"] else None,
+                             c.max_motion_time, c.period_band)
 
     def cases(self) -> list[Scenario]:
         """Return the single-move scenarios of a sweep (itself when not a sweep)."""
@@ -873,8 +883,9 @@ def parse_scenario(data: Mapping[str, Any], source: str = "<string>",
         raise c.err("DJL_T_F", list(DJL_T_F), "must hold four jerk times > 0 s")
     djl_tuning = c.string("djl_tuning", "paper", choices=DJL_METHODS)
     jl_tuning = c.string("jl_tuning", "end", choices=JL_METHODS)
-    map_error = c.number("map_error", 0.1, nonneg=True, what="relative map error, e.g. 0.1")
-    if not map_error < 1.0:
+    # deprecated aliases of [uncertainty] map_scale and damping (their earlier place)
+    map_error = c.number("map_error", None, nonneg=True, what="relative map error, e.g. 0.1")
+    if map_error is not None and not map_error < 1.0:
         raise c.err("map_error", map_error, "must be < 1 (a relative error of the map)")
     damping = c.numbers("damping", None, what="damping factors, e.g. [0.5, 1.0, 2.0]")
     if damping is not None and not all(x > 0 for x in damping):
@@ -893,23 +904,39 @@ def parse_scenario(data: Mapping[str, Any], source: str = "<string>",
         raise c.err("period_band", period_band, "must be <= 10")
     c.finish()
     compare = CompareSpec(tuple(profiles), djl_rule, JL_T_F, DJL_T_F, djl_tuning, jl_tuning,
-                          map_error, damping, max_motion_time, period_band)
+                          max_motion_time, period_band)
 
-    # [uncertainty]; without it, [compare] map_error and damping (their earlier place) give it
+    # [uncertainty], the one home of the map scale and the damping range; [compare]
+    # map_error and damping, their earlier place, are read here once as its aliases
     u = _Table(source, "uncertainty", top.raw("uncertainty", {}))
-    u_scale = u.number("map_scale", map_error, nonneg=True,
+    u_scale = u.number("map_scale", None, nonneg=True,
                        what="relative error of the whole map, e.g. 0.1")
     u_slope = u.number("map_slope", 0.0, nonneg=True,
                        what="relative error of the map's slope, e.g. 0.3")
     u_shift = u.number("z_shift", 0.0, nonneg=True, what="shift of the map along z in m")
-    u_damp = u.numbers("damping", None if damping is None else
-                       (min(min(damping), 1.0), max(max(damping), 1.0)),
-                       what="damping factor range [lo, hi], e.g. [0.5, 2.0]")
+    u_damp = u.numbers("damping", None, what="damping factor range [lo, hi], e.g. [0.5, 2.0]")
     u.finish()
     if u_damp is not None and len(u_damp) != 2:
         raise u.err("damping", list(u_damp), "must be two factors [lo, hi]")
+    alias_damp = None if damping is None else (min(min(damping), 1.0), max(max(damping), 1.0))
     try:
-        uncertainty = UncertaintySpec(u_scale, u_slope, u_shift,
+        u_scale = resolve_alias(("uncertainty.map_scale", u_scale),
+                                ("compare.map_error", map_error))
+        u_damp = resolve_alias(("uncertainty.damping", u_damp),
+                               (f"compare.damping {list(damping or ())!r} as a range",
+                                alias_damp))
+    except ValueError as e:
+        raise ScenarioError(source, "", None, str(e)) from None
+    for old_key, new_key, value in (("map_error", "map_scale", map_error),
+                                    ("damping", "damping", alias_damp)):
+        if value is not None:
+            shown = f"{value!r}" if old_key == "map_error" else f"{list(value)!r}"
+            warnings.warn(f"{source}: [compare] {old_key} is deprecated: write [uncertainty] "
+                          f"{new_key} = {shown} instead (read as that)",
+                          DeprecatedAliasWarning, stacklevel=2)
+    try:
+        uncertainty = UncertaintySpec(DEFAULT_UNCERTAINTY.map_scale if u_scale is None
+                                      else u_scale, u_slope, u_shift,
                                       tuple(u_damp) if u_damp is not None else (1.0, 1.0))
     except ValueError as e:
         raise ScenarioError(source, "uncertainty", None, str(e)) from None

@@ -134,14 +134,21 @@ def variants_of(pairs: list[tuple[str, str]]) -> list[str]:
 class TuningOptions:
     """What the ``optimal`` / ``robust`` searches may do.
 
+    A scenario's are :meth:`harness.scenario.Scenario.tuning_options`: the map
+    error and the damping come from its ``uncertainty``
+    (:class:`harness.uncertainty.UncertaintySpec`, their only home), whose
+    tuning set is what the robust search minimises over.
+
     Attributes
     ----------
     map_error : float
         Robust: the whole map f(z) is scaled by 1 + e for e in
-        [−map_error, +map_error] (a grid 1 % apart, at least 21 points).
+        [−map_error, +map_error] (the uncertainty's ``map_scale``; :meth:`factors`:
+        a grid 1 % apart, at least 21 points).
     damping : tuple of float, optional
-        Robust: every mode's damping ratio is also scaled by each of these
-        factors (e.g. ``(0.5, 1.0, 2.0)``); default: nominal damping only.
+        Robust: every mode's damping ratio is also scaled by factors in this
+        range (the uncertainty's ``damping``, e.g. ``(0.5, 2.0)``); default:
+        nominal damping only.
     max_motion_time : float or "JL", optional
         The motion may not last longer than this (s), or than JL's motion.
         Default: no bound.

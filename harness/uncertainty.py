@@ -8,12 +8,18 @@ z and scales the damping; a scenario's ``[uncertainty]`` table
 are drawn: the *tuning* set the robust methods minimise over, and the finer
 *scoring* set every table reports (never the points a method was tuned on).
 
-* :data:`DEFAULT_ERRORS` -- the map-error curves, −20 % … +20 %, 1 % apart;
-* :data:`WORST_SPAN`, :data:`WORST_ERRORS` -- their worst case, over ±10 %;
+* :class:`UncertaintySpec` -- the ranges; the *only* home of the map scale
+  (the relative error of the whole map): its tuning and scoring sets, and the
+  map-error grids of the robustness curves (:meth:`UncertaintySpec.curve_errors`,
+  ±2·map_scale) and of their worst case (:meth:`UncertaintySpec.worst_errors`,
+  ±map_scale); :func:`span_text` writes that span in every label;
+* :func:`parse_uncertainty`, :func:`uncertainty_items` -- the ``--uncertainty``
+  grammar (``map_scale=0.1,map_slope=0.3,z_shift=0.05,damping=0.5:2``);
+* :func:`resolve_alias`, :class:`DeprecatedAliasWarning` -- the earlier places
+  of the map scale (``[compare] map_error``, ``--map-error``), read once as
+  deprecated aliases, a disagreement refused;
 * :func:`check_map_error` -- a bound ``map_error`` in [0, 1) (tuning, tables);
 * :func:`check_map_errors` -- errors e, finite and > −1 (a frequency > 0);
-* :class:`UncertaintySpec`, :func:`parse_uncertainty` -- the ranges, and the
-  ``--uncertainty`` grammar (``map_scale=0.1,map_slope=0.3,z_shift=0.05,damping=0.5:2``);
 * :func:`width_sweeps`, :class:`WidthSweep`, :func:`level`, :func:`scaled_uncertainty` --
   the actual error wider than stated: each kind alone and the whole box, out to
   twice the stated ranges, every point with its width (1 = the stated edge).
@@ -30,12 +36,12 @@ from typing import Any
 
 import numpy as np
 
+from .errors import DeprecatedAliasWarning
+
 __all__ = [
-    "DEFAULT_ERRORS",
     "DEFAULT_UNCERTAINTY",
     "KINDS",
-    "WORST_ERRORS",
-    "WORST_SPAN",
+    "DeprecatedAliasWarning",
     "Perturbation",
     "UncertaintySet",
     "UncertaintySpec",
@@ -44,18 +50,54 @@ __all__ = [
     "check_map_errors",
     "level",
     "parse_uncertainty",
+    "resolve_alias",
     "scaled_uncertainty",
+    "span_text",
+    "uncertainty_items",
     "width_sweeps",
 ]
 
-DEFAULT_ERRORS = np.linspace(-0.2, 0.2, 41)
-"""Map errors of the robustness curves: −20 % to +20 %, 1 % apart."""
 
-WORST_SPAN = 0.10
-"""Span of the worst case: map errors within ±10 %."""
+def span_text(span: float) -> str:
+    """Return a relative span in percent for a label: ``10`` for 0.1, ``12.5`` for 0.125.
 
-WORST_ERRORS = np.linspace(-WORST_SPAN, WORST_SPAN, 21)
-"""Map errors of the worst case alone: −10 % to +10 %, 1 % apart (a subset of the curves')."""
+    Every label of a map-error span (``+/-10 %``, ``worst±10%``, ``|e| <= 10 %``) is
+    written with it, from the run's :attr:`UncertaintySpec.map_scale`.
+    """
+    return f"{100.0 * float(span):g}"
+
+
+def resolve_alias(new: tuple[str, Any], old: tuple[str, Any]) -> Any:
+    """Return a setting given under its new key, its deprecated alias, or both.
+
+    Parameters
+    ----------
+    new, old : (str, value)
+        The key's name (as the user wrote it, e.g. ``uncertainty.map_scale`` or
+        ``--uncertainty map_scale``) and its value, None when not given.
+
+    Returns
+    -------
+    value
+        The one given (the new key's when both agree); None when neither is.
+
+    Raises
+    ------
+    ValueError
+        When both are given with different values: the message names both keys and
+        values (nothing is guessed).
+    """
+    (new_key, new_value), (old_key, old_value) = new, old
+    if new_value is None:
+        return old_value
+    if old_value is not None and old_value != new_value:
+        raise ValueError(f"{old_key} = {_shown(old_value)} (deprecated) and {new_key} = "
+                         f"{_shown(new_value)} disagree: give only {new_key}")
+    return new_value
+
+
+def _shown(value: Any) -> str:
+    return repr(list(value)) if isinstance(value, tuple) else repr(value)
 
 
 def check_map_error(map_error: object, name: str = "map_error") -> float:
@@ -235,6 +277,12 @@ class UncertaintySpec:
     z_shift: float = 0.0
     damping: tuple[float, float] = (1.0, 1.0)
 
+    CURVE_POINTS = 41
+    """Points of the robustness curves over ±2·map_scale (:meth:`curve_errors`)."""
+
+    WORST_POINTS = 21
+    """Points of the worst case alone over ±map_scale (:meth:`worst_errors`)."""
+
     TUNING_POINTS = {"map_scale": 9, "map_slope": 5, "z_shift": 5, "damping": 3}
     """Points of each range in the tuning set (plus the corners of the box)."""
 
@@ -296,6 +344,30 @@ class UncertaintySpec:
         """Return the points every method is scored on: finer grids, the box's 3^d grid."""
         return _drawn(self, "scoring")
 
+    def curve_errors(self, points: int = CURVE_POINTS) -> np.ndarray:
+        """Return the map errors e of the robustness curves: ±2·map_scale, ``points`` of them.
+
+        41 points by default, the worst case's (:meth:`worst_errors`) among them: with
+        the default map scale 0.1, −20 % … +20 %, 1 % apart.  A map scale of 0 gives
+        the nominal map alone (e = 0).
+        """
+        if isinstance(points, bool) or not isinstance(points, int) or points < 1:
+            raise ValueError(f"points must be an integer >= 1, got {points!r}")
+        if self.map_scale == 0.0:
+            return np.zeros(1)
+        return np.linspace(-2.0 * self.map_scale, 2.0 * self.map_scale, points)
+
+    def worst_errors(self) -> np.ndarray:
+        """Return the map errors e of the worst case alone: ±map_scale, 21 points.
+
+        With the default map scale 0.1, −10 % … +10 %, 1 % apart; the same points as
+        the curves' within ±map_scale (:meth:`curve_errors`).  A map scale of 0 gives
+        the nominal map alone (e = 0).
+        """
+        if self.map_scale == 0.0:
+            return np.zeros(1)
+        return np.linspace(-self.map_scale, self.map_scale, self.WORST_POINTS)
+
     def describe(self) -> str:
         """Return the ranges in words, e.g. ``map scale +/-10 %, damping x0.5..2``."""
         parts = []
@@ -325,6 +397,48 @@ DEFAULT_UNCERTAINTY = UncertaintySpec()
 """The default: the whole map off by up to ±10 %, nothing else."""
 
 
+_KEYS = ("map_scale", "map_slope", "z_shift", "damping")
+"""The keys of ``[uncertainty]`` and ``--uncertainty``."""
+
+_NONE: dict[str, Any] = {"map_scale": 0.0, "map_slope": 0.0, "z_shift": 0.0,
+                         "damping": (1.0, 1.0)}
+"""What ``none`` sets: every range off."""
+
+
+def uncertainty_items(text: str | None) -> dict[str, Any]:
+    """Read the keys an ``--uncertainty`` value sets, and only those (later items win).
+
+    ``none`` sets every key (every range off); ``damping`` gives a (lo, hi) pair.
+
+    Raises
+    ------
+    ValueError
+        An unknown key, or a value that is not a number (naming the item).
+    """
+    values: dict[str, Any] = {}
+    for raw in (text or "").split(","):
+        item = raw.strip()
+        if not item:
+            continue
+        if item.lower() == "none":
+            values.update(_NONE)
+            continue
+        key, sep, value = (s.strip() for s in item.partition("="))
+        if not sep or key not in _KEYS:
+            raise ValueError(f"{item!r}: write KEY=VALUE with KEY one of {', '.join(_KEYS)} "
+                             f"(or 'none')")
+        try:
+            if key == "damping":
+                lo, sep2, hi = value.partition(":")
+                values[key] = (float(lo), float(hi) if sep2 else float(lo))
+            else:
+                values[key] = float(value)
+        except ValueError:
+            raise ValueError(f"{item!r}: {value!r} is not a number"
+                             + (" (damping takes LO:HI)" if key == "damping" else "")) from None
+    return values
+
+
 def parse_uncertainty(text: str | None, base: UncertaintySpec = DEFAULT_UNCERTAINTY
                       ) -> UncertaintySpec:
     """Read an ``--uncertainty`` value: ``KEY=VALUE`` items, comma-separated.
@@ -340,26 +454,7 @@ def parse_uncertainty(text: str | None, base: UncertaintySpec = DEFAULT_UNCERTAI
     """
     values: dict[str, Any] = {"map_scale": base.map_scale, "map_slope": base.map_slope,
                               "z_shift": base.z_shift, "damping": base.damping}
-    for raw in (text or "").split(","):
-        item = raw.strip()
-        if not item:
-            continue
-        if item.lower() == "none":
-            values.update(map_scale=0.0, map_slope=0.0, z_shift=0.0, damping=(1.0, 1.0))
-            continue
-        key, sep, value = (s.strip() for s in item.partition("="))
-        if not sep or key not in values:
-            raise ValueError(f"{item!r}: write KEY=VALUE with KEY one of {', '.join(values)} "
-                             f"(or 'none')")
-        try:
-            if key == "damping":
-                lo, sep2, hi = value.partition(":")
-                values[key] = (float(lo), float(hi) if sep2 else float(lo))
-            else:
-                values[key] = float(value)
-        except ValueError:
-            raise ValueError(f"{item!r}: {value!r} is not a number"
-                             + (" (damping takes LO:HI)" if key == "damping" else "")) from None
+    values.update(uncertainty_items(text))
     return UncertaintySpec(**values)
 
 

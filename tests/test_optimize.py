@@ -16,7 +16,7 @@ from harness.simulation.session import Session
 from harness.tuning.search import pattern_search
 from harness.tuning.tune import tune_profile
 from harness.tuning_options import TuningOptions, split_profile
-from harness.uncertainty import UncertaintySpec
+from harness.uncertainty import DeprecatedAliasWarning, UncertaintySpec
 
 
 def _with(sc, **compare):
@@ -278,13 +278,19 @@ def test_bad_compare_keys_are_refused_by_name(line, key):
 def test_compare_keys_parse():
     import tomllib
 
-    sc = parse_scenario(tomllib.loads(_BASE + 'djl_tuning = "robust"\nmap_error = 0.2\n'
-                                      'damping = [0.5, 2.0]\nmax_motion_time = "JL"\n'
-                                      'profiles = ["AL", "JL", "DJL", "DJL-optimal"]\n'), "t.toml")
+    with pytest.warns(DeprecatedAliasWarning) as noted:
+        sc = parse_scenario(tomllib.loads(_BASE + 'djl_tuning = "robust"\nmap_error = 0.2\n'
+                                          'damping = [0.5, 2.0]\nmax_motion_time = "JL"\n'
+                                          'profiles = ["AL", "JL", "DJL", "DJL-optimal"]\n'),
+                            "t.toml")
+    assert sorted(str(w.message).split(": ")[1] for w in noted) == [
+        "[compare] damping is deprecated", "[compare] map_error is deprecated"]
     c = sc.compare
-    assert (c.djl_tuning, c.map_error, c.damping, c.max_motion_time) == ("robust", 0.2,
-                                                                         (0.5, 2.0), "JL")
-    assert c.tuning_options().factors()[0] == pytest.approx(0.8)
+    assert (c.djl_tuning, c.max_motion_time) == ("robust", "JL")
+    # map_error and damping, deprecated there, are read into the one home of the uncertainty
+    assert not hasattr(c, "map_error") and not hasattr(c, "damping")
+    assert (sc.uncertainty.map_scale, sc.uncertainty.damping) == (0.2, (0.5, 2.0))
+    assert sc.tuning_options().factors()[0] == pytest.approx(0.8)
     assert c.profiles[-1] == "DJL-optimal"
 
 

@@ -58,7 +58,7 @@ def cases(fast):
     out = {}
     for name in ("X", "Y"):
         sc = load_scenario(name)
-        band = run_case(sc, fast, uncertainty=False).band
+        band = run_case(sc, fast, score_worst_cases=False).band
         jl = tune_profile(fast, sc, "JL")
         out[name] = (sc, band, jl, fast.run(sc, "JL", jl.T_F))
     return out

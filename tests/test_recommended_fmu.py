@@ -26,7 +26,7 @@ from harness.simulation.shaped_axis import ShapedAxis, ShaperSpec
 def rec(request, fmu2):
     sc = load_scenario(request.param)
     with Session(fmu2) as s:
-        res = run_case(sc, s, recommend=True, uncertainty=False)
+        res = run_case(sc, s, recommend=True, score_worst_cases=False)
     return sc, res
 
 

@@ -13,8 +13,6 @@ import pytest
 from harness.evaluation import run_case
 from harness.modemap import LinearLaw, ModeMap, ModeSpec
 from harness.robustness import (
-    DEFAULT_ERRORS,
-    WORST_ERRORS,
     RobustnessResult,
     map_error_residuals,
     robustness,
@@ -22,6 +20,13 @@ from harness.robustness import (
 from harness.scenario import load_scenario
 from harness.simulation.session import Session
 from harness.tuning.tune import tune_profile
+from harness.uncertainty import DEFAULT_UNCERTAINTY
+
+CURVES_10 = np.linspace(-0.2, 0.2, 41)
+"""The default uncertainty's map-error curves (map scale 0.1): -20 % .. +20 %, 1 % apart."""
+
+WORST_10 = np.linspace(-0.1, 0.1, 21)
+"""Their worst case alone: -10 % .. +10 %, 1 % apart."""
 
 
 def short(name: str, t_after: float = 0.6):
@@ -101,20 +106,26 @@ def test_worst_case_over_10_percent_vs_brute_force(tuned):
 
 def test_run_case_worst_and_curves(tuned, tmp_path):
     """robustness="worst": the worst case over the 21 points of ±10 %, on each profile;
-    "curves": the 41 points of ±20 % kept on the result, the worst case taken from them."""
+    "curves": the 41 points of ±20 % kept on the result, the worst case taken from them
+    (the default uncertainty: the very grids of before it was the only home of the span)."""
     sc, s, T = tuned
-    assert np.allclose(DEFAULT_ERRORS[10:31], WORST_ERRORS, atol=1e-15)
+    assert sc.uncertainty == DEFAULT_UNCERTAINTY
+    np.testing.assert_array_equal(DEFAULT_UNCERTAINTY.curve_errors(), CURVES_10)
+    np.testing.assert_array_equal(DEFAULT_UNCERTAINTY.worst_errors(), WORST_10)
+    assert np.allclose(CURVES_10[10:31], WORST_10, atol=1e-15)
     base = run_case(sc, s)
     assert base.robustness is None
-    assert all(math.isnan(p.worst_residual_10pct) for p in base.profiles.values())
+    assert all(math.isnan(p.worst_map_residual) for p in base.profiles.values())
     w = run_case(sc, s, keep_runs=False, robustness="worst")
     c = run_case(sc, s, robustness="curves")
     assert w.robustness is None and isinstance(c.robustness, RobustnessResult)
-    assert c.robustness.errors.size == 41
+    np.testing.assert_array_equal(c.robustness.errors, CURVES_10)
     for prof in ("AL", "JL", "DJL"):
-        expect = float(np.max(map_error_residuals(sc, s, prof, T[prof], WORST_ERRORS)))
-        assert w.profiles[prof].worst_residual_10pct == pytest.approx(expect, rel=1e-12)
-        assert c.profiles[prof].worst_residual_10pct == pytest.approx(expect, rel=1e-12)
+        expect = float(np.max(map_error_residuals(sc, s, prof, T[prof], WORST_10)))
+        assert w.profiles[prof].worst_map_residual == pytest.approx(expect, rel=1e-12)
+        assert c.profiles[prof].worst_map_residual == pytest.approx(expect, rel=1e-12)
+        # the earlier name reads the same number
+        assert c.profiles[prof].worst_residual_10pct == c.profiles[prof].worst_map_residual
         # the nominal point of the curve is the case's residual
         assert c.robustness.nominal()[prof] == pytest.approx(
             c.profiles[prof].metrics.residual, rel=1e-12)
@@ -125,11 +136,11 @@ def test_run_case_worst_and_curves(tuned, tmp_path):
     rows = list(csv.DictReader(c.to_csv(tmp_path / "c.csv").open()))
     for row in rows:
         p = c.profiles[row["profile"]]
-        assert float(row["residual_worst_map10_m"]) == pytest.approx(p.worst_residual_10pct,
+        assert float(row["residual_worst_map10_m"]) == pytest.approx(p.worst_map_residual,
                                                                     rel=1e-9)
-    al = c.profiles["AL"].worst_residual_10pct
+    al = c.profiles["AL"].worst_map_residual
     assert float(rows[1]["residual_worst_map10_pct_of_AL"]) == pytest.approx(
-        100 * c.profiles["JL"].worst_residual_10pct / al, rel=1e-9)
+        100 * c.profiles["JL"].worst_map_residual / al, rel=1e-9)
     with pytest.raises(ValueError, match="robustness"):
         run_case(sc, s, robustness="everything")
 

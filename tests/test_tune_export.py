@@ -72,7 +72,8 @@ def _scenario(text: str = SCENARIO):
 
 def _methods(sc, djl: str, jl: str, e: float = 0.1):
     return dataclasses.replace(sc, compare=dataclasses.replace(
-        sc.compare, djl_tuning=djl, jl_tuning=jl, map_error=e))
+        sc.compare, djl_tuning=djl, jl_tuning=jl),
+        uncertainty=dataclasses.replace(sc.uncertainty, map_scale=e))
 
 
 def _close(a: float, b: float, rel: float = REL) -> bool:

@@ -20,6 +20,7 @@ import re
 import sys
 import tempfile
 import time
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
@@ -30,11 +31,18 @@ from ..files import OutputSet, Terminated, sigterm_raises
 from ..scenario import ScenarioError, load_scenario
 from ..tuning_options import DJL_METHODS, JL_METHODS, variants_of
 from ..tuning_options import parse_tuning as parse_tuning_pairs
-from ..uncertainty import check_map_error, parse_uncertainty
+from ..uncertainty import (
+    DeprecatedAliasWarning,
+    check_map_error,
+    parse_uncertainty,
+    resolve_alias,
+    uncertainty_items,
+)
 
 __all__ = ["CommandError", "add_engine_option", "add_fmu_options", "add_map_error_option",
            "add_out_option", "add_parallel_options", "add_quiet_option", "add_tuning_option",
-           "check_map_error_option", "load_scenarios", "parse_tuning", "write_outputs"]
+           "check_map_error_option", "load_scenarios", "note", "parse_tuning",
+           "uncertainty_option", "write_outputs"]
 
 OUT_ROOT = Path("djl-fmu-out")
 """Where the commands write by default: ``./djl-fmu-out/<command>``."""
@@ -127,10 +135,12 @@ def add_tuning_option(p: argparse.ArgumentParser, use: str) -> None:
 
 
 def add_map_error_option(p: argparse.ArgumentParser, what: str) -> None:
-    """``--map-error E``: the relative error of the whole mode map, in [0, 1)."""
+    """``--map-error E``: deprecated, read as ``--uncertainty map_scale=E``.
+
+    :func:`uncertainty_option` reads it into ``--uncertainty`` (and says so on stderr).
+    """
     p.add_argument("--map-error", type=float, default=None, metavar="E",
-                   help=f"{what}: the whole mode map f(z) off by up to +/-E, E in [0, 1) "
-                        "(default: the scenario's map_error, 0.1)")
+                   help=f"deprecated: the same as --uncertainty map_scale=E ({what})")
 
 
 def add_uncertainty_option(p: argparse.ArgumentParser) -> None:
@@ -143,8 +153,61 @@ def add_uncertainty_option(p: argparse.ArgumentParser) -> None:
                         "keep the scenario's [uncertainty] (docs/harness.md)")
 
 
+def note(text: str) -> None:
+    """Print a note for the user on stderr, one line: ``djl-fmu: note: <text>``.
+
+    The deprecated aliases of the uncertainty (``--map-error``, a scenario's
+    ``[compare] map_error`` or ``damping``) are reported this way, even with ``-q``.
+    """
+    print(f"djl-fmu: note: {text}", file=sys.stderr, flush=True)
+
+
+def uncertainty_option(text: str | None, map_error: float | None) -> str | None:
+    """Return ``--uncertainty`` with the deprecated ``--map-error E`` read into it, once.
+
+    ``--map-error E`` is ``--uncertainty map_scale=E``: given alone, it becomes that (and
+    a note says so); given with an ``--uncertainty`` that sets another map scale (``none``
+    sets 0), the two are refused.
+
+    Parameters
+    ----------
+    text : str, optional
+        The ``--uncertainty`` value.
+    map_error : float, optional
+        The ``--map-error`` value.
+
+    Returns
+    -------
+    str or None
+        The ``--uncertainty`` value to apply (:func:`apply_uncertainty`); None: neither.
+
+    Raises
+    ------
+    CommandError
+        Status 2: ``--map-error`` outside [0, 1), a malformed ``--uncertainty``, or both
+        options with different map scales (the message names both values).
+    """
+    e = check_map_error_option(map_error)
+    if e is None:
+        return text
+    try:
+        given = uncertainty_items(text).get("map_scale")
+    except ValueError as err:
+        raise CommandError(2, f"--uncertainty {text!r}: {err}") from None
+    try:
+        resolve_alias(("--uncertainty map_scale", given), ("--map-error", e))
+    except ValueError as err:
+        raise CommandError(2, f"{err} (--map-error E is the same as --uncertainty "
+                              f"map_scale=E)") from None
+    note(f"--map-error is deprecated: write --uncertainty map_scale={e!r} instead (read as "
+         f"that)")
+    return f"{text},map_scale={e!r}" if text else f"map_scale={e!r}"
+
+
 def apply_uncertainty(scenarios: Sequence[Any], text: str | None) -> list[Any]:
     """Set ``--uncertainty`` on every scenario (None: unchanged).
+
+    The text is :func:`uncertainty_option`'s (``--map-error`` already read into it).
 
     Raises
     ------
@@ -246,11 +309,18 @@ def load_scenarios(names: Sequence[str], fmu: Path | None, fmi_version: int | No
         output path that is not a folder or cannot be written.
     """
     try:
-        scenarios = [load_scenario(n) for n in names]
+        with warnings.catch_warnings(record=True) as noted:
+            warnings.simplefilter("always", DeprecatedAliasWarning)
+            scenarios = [load_scenario(n) for n in names]
         if fmu is not None or fmi_version is not None:
             scenarios = [s.with_fmu(fmu, fmi_version) for s in scenarios]
     except ScenarioError as e:
         raise CommandError(2, str(e)) from None
+    for w in noted:  # a deprecated alias read as its key: one line each, on stderr
+        if issubclass(w.category, DeprecatedAliasWarning):
+            note(str(w.message))
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     check_stems(scenarios)
     check_out_dir(out)
     return scenarios, [safe_stem(s.name) for s in scenarios]
@@ -528,10 +598,8 @@ def run_forked(tasks: Sequence[Callable[[], Any]], workers: int | None = None,
         _TASKS.clear()
 
 
-def apply_tuning(scenarios: Sequence[Any], variants: Sequence[str],
-                 map_error: float | None) -> list[Any]:
-    """Add the tuned profile variants and the robust method's map error to every scenario."""
-    map_error = check_map_error_option(map_error)
+def apply_tuning(scenarios: Sequence[Any], variants: Sequence[str]) -> list[Any]:
+    """Add the tuned profile variants to every scenario (uncertainty: :func:`apply_uncertainty`)."""
     out = []
     for sc in scenarios:
         cmp = sc.compare
@@ -539,10 +607,5 @@ def apply_tuning(scenarios: Sequence[Any], variants: Sequence[str],
         if any(v.startswith("DJL") or v.startswith("JL") for v in variants) and \
                 "JL" not in profiles:
             profiles = ("JL", *profiles)  # the tuned variants are compared with JL
-        cmp = dataclasses.replace(cmp, profiles=profiles)
-        unc = sc.uncertainty
-        if map_error is not None:
-            cmp = dataclasses.replace(cmp, map_error=float(map_error))
-            unc = dataclasses.replace(unc, map_scale=float(map_error))
-        out.append(dataclasses.replace(sc, compare=cmp, uncertainty=unc))
+        out.append(dataclasses.replace(sc, compare=dataclasses.replace(cmp, profiles=profiles)))
     return out

@@ -23,7 +23,6 @@ from ._common import (
     add_quiet_option,
     add_scenarios_argument,
     add_uncertainty_option,
-    apply_tuning,
     apply_uncertainty,
     check_rows_finite,
     check_stems,
@@ -33,6 +32,7 @@ from ._common import (
     progress_line,
     report_written,
     safe_stem,
+    uncertainty_option,
     write_outputs,
 )
 
@@ -72,12 +72,13 @@ final Z position and its damping) unless said otherwise:
 Per scenario: motion time and its ratio to the time-optimal JL, residual
 vibration (free-oscillation amplitude when the reference ends) and % of AL,
 settling time into the band of the scenario (default: 1 % of AL's residual,
-shared by every method), the worst residual over a map error within +/-10 %
+shared by every method), the worst residual over a map error within
++/- the uncertainty's map scale (--uncertainty map_scale=E; default +/-10 %)
 on the time-varying plant (the whole f(z) map scaled by 1 + e, every reference
-planned once on the nominal map; curves over +/-20 %, fast engine), and the
-residual against the mode-frequency error on a stationary mode at the end
-frequency.  Every method is also scored over the scenario's uncertainty
-(--uncertainty; default map scale +/-10 %, its 41-point scoring set): worst
+planned once on the nominal map; curves over +/-2E, by default +/-20 %, fast
+engine), and the residual against the mode-frequency error on a stationary mode
+at the end frequency.  Every method is also scored over the scenario's
+uncertainty (default map scale +/-10 %, its 41-point scoring set): worst
 residual and worst-case settling time, and that settling as a ratio to the
 physical limit ("/ bound": a linear programme over piecewise-constant jerk
 proves that no profile at JL's jerk, under the same v_max and a_max, settles
@@ -98,13 +99,15 @@ scenario; default: X and Y.  Sweeps are not accepted.
 Outputs, in --out (default ./djl-fmu-out/compare), written once every run has
 succeeded:
   <name>.csv              one row per method (worst_residual_10pct_m: the
-                          worst case over a map error within +/-10 %;
+                          worst case over a map error within +/- the run's
+                          map scale, by default +/-10 %: the name is kept;
                           settling_time_worst_s, settling_bound_s and
                           settling_worst_over_bound: the worst-case settling,
                           the physical limit and their ratio)
   <name>-map-error.csv    residual against the map error e (time-varying plant,
-                          whole map scaled by 1 + e), per method
-  <name>-map-error.png    the same, plotted
+                          whole map scaled by 1 + e, e in +/-2 x the map scale),
+                          per method
+  <name>-map-error.png    the same, plotted (shaded: +/- the map scale)
   <name>-robustness.csv   residual against the frequency error of a stationary
                           mode, per method
   <name>-robustness.png   the same, plotted
@@ -168,8 +171,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "measurement (default 30; 0 to skip)")
     add_fmu_options(p)
     add_engine_option(p, "fmu", "fmu")
-    add_map_error_option(p, "uncertainty of the robust DJL's tuning")
     add_uncertainty_option(p)
+    add_map_error_option(p, "uncertainty of the robust DJL's tuning")
     add_quiet_option(p)
     p.set_defaults(func=interruptible(run))
 
@@ -194,8 +197,8 @@ def run(args: argparse.Namespace) -> int:
         raise CommandError(2, "--timeopt must be >= 0")
     scenarios, _ = load_scenarios(args.scenarios or ["X", "Y"], args.fmu, args.fmi_version,
                                   args.out)
-    scenarios = apply_tuning(scenarios, [], args.map_error)
-    scenarios = apply_uncertainty(scenarios, args.uncertainty)
+    scenarios = apply_uncertainty(scenarios, uncertainty_option(args.uncertainty,
+                                                                args.map_error))
     sweeps = [s.name for s in scenarios if s.is_sweep]
     if sweeps:
         raise CommandError(2, f"{', '.join(sweeps)}: sweeps are not compared (give "

@@ -25,6 +25,7 @@ from ._common import (
     load_scenarios,
     parse_tuning,
     report_written,
+    uncertainty_option,
     write_outputs,
 )
 
@@ -111,8 +112,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                                     "(deterministic)")
     add_engine_option(p, "fast", "fast")
     add_tuning_option(p, "add")
-    add_map_error_option(p, "uncertainty of the 'robust' tuning")
     add_uncertainty_option(p)
+    add_map_error_option(p, "uncertainty of the 'robust' tuning")
     add_quiet_option(p, "the PNG heat maps")
     p.set_defaults(func=interruptible(run))
 
@@ -126,8 +127,8 @@ def run(args: argparse.Namespace) -> int:
     # 1. check everything before running anything
     check_parallel_options(args.workers, args.scheduler, args.max_moves)
     (sc,), (stem,) = load_scenarios([args.scenario], None, None, args.out)
-    (sc,) = apply_tuning([sc], parse_tuning(args.tuning), args.map_error)
-    (sc,) = apply_uncertainty([sc], args.uncertainty)
+    (sc,) = apply_tuning([sc], parse_tuning(args.tuning))
+    (sc,) = apply_uncertainty([sc], uncertainty_option(args.uncertainty, args.map_error))
     if sc.map is None:
         raise CommandError(2, f"scenario {sc.name} ({sc.source}) has no [map] table: add one "
                               f"(format: docs/map.md), or use the embedded X or Y")

@@ -36,6 +36,7 @@ from ._common import (
     progress_line,
     report_written,
     run_forked,
+    uncertainty_option,
     write_outputs,
 )
 
@@ -66,8 +67,10 @@ simulation has succeeded:
   <name>.png      reference x/v/a/j, deflection, f(t) and z(t) (a sweep: DJL vs JL per case)
   <name>-robustness.csv, <name>-robustness.png
                   single moves: each profile's residual when the whole mode map is off
-                  by 1 + e, e in -20 %..+20 % (jerk times tuned on the nominal map);
-                  sweeps report the worst case over +/-10 % per case in <name>.csv
+                  by 1 + e, e in +/-2 x the uncertainty's map scale (41 points; by default
+                  -20 %..+20 %; jerk times tuned on the nominal map); the worst case over
+                  +/-map_scale (default +/-10 %) is in <name>.csv (residual_worst_map10_m:
+                  the name kept, the run's range), per case for sweeps
   table2.csv      Table 2 statistics, when sweeps ran
   summary.txt     the tables printed on screen
   JerkLimitedTrajectory-fmi2.fmu, JerkLimitedTrajectory-fmi3.fmu
@@ -105,8 +108,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_fmu_options(p)
     add_engine_option(p, None, "fmu for single moves, fast for sweeps")
     add_tuning_option(p, "add")
-    add_map_error_option(p, "uncertainty of the 'robust' tuning")
     add_uncertainty_option(p)
+    add_map_error_option(p, "uncertainty of the 'robust' tuning")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help="with --tuning: run each sweep's cases on N processes (default: every "
                         "core); without it the scenarios already share the cores")
@@ -136,8 +139,9 @@ def run(args: argparse.Namespace) -> int:
     scenarios, stems = load_scenarios(args.scenarios or list(DEFAULT_SCENARIOS), args.fmu,
                                       args.fmi_version, args.out)
     variants = parse_tuning(args.tuning)
-    scenarios = apply_tuning(scenarios, variants, args.map_error)
-    scenarios = apply_uncertainty(scenarios, args.uncertainty)
+    scenarios = apply_tuning(scenarios, variants)
+    scenarios = apply_uncertainty(scenarios, uncertainty_option(args.uncertainty,
+                                                                args.map_error))
     if args.workers is not None and args.workers < 1:
         raise CommandError(2, f"--workers {args.workers}: must be >= 1")
 

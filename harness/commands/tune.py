@@ -18,33 +18,34 @@ from ._common import (
     add_tuning_option,
     add_uncertainty_option,
     apply_uncertainty,
-    check_map_error_option,
     check_parallel_options,
     check_rows_finite,
     interruptible,
     load_scenarios,
     report_written,
+    uncertainty_option,
     write_outputs,
 )
 
 DESCRIPTION = """\
 Tune the jerk times of JL and DJL for a move, every case of a [sweep] or every
 point of a [map] grid (Z start, Z travel, distance, v_max), measure the
-residual vibration each leaves (on the nominal mode map and, worst case, with
-the whole map off by up to +/- the map error), print them and write them as a
-CSV file that a controller or the generator FMU can load.
+residual vibration each leaves (on the nominal mode map and, worst case, over
+the uncertainty: by default the whole map off by up to +/-10 %), print them and
+write them as a CSV file that a controller or the generator FMU can load.
 
 Methods (--tuning, default: DJL robust, JL end):
   DJL paper     the modal period at the start of each stage (the paper's rule; 3 ms)
   DJL optimal   least residual on the nominal map (about 0.1 s a move)
-  DJL robust    least worst-case residual over a map error of +/- --map-error
-                (default: the scenario's [compare] map_error, 0.1; about 0.4 s a move)
+  DJL robust    least worst-case residual over the uncertainty's tuning set
+                (--uncertainty map_scale=E, default: the scenario's [uncertainty],
+                map_scale 0.1)
   JL  end       the modal period at the end of the motion (the paper's)
   JL  optimal   least residual on the nominal map
 --tuning takes a bare DJL method (robust, optimal, paper), 'end', or
 'djl=METHOD,jl=METHOD'. The methods come from --tuning, not from the
-scenario's djl_tuning / jl_tuning; its other tuning settings (damping,
-max_motion_time, period_band, djl_rule, tune_mode) apply. Jerk times the
+scenario's djl_tuning / jl_tuning; its other tuning settings (max_motion_time,
+period_band, djl_rule, tune_mode) and its [uncertainty] apply. Jerk times the
 scenario imposes (JL_T_F, DJL_T_F) are ignored: this command computes them.
 
 What is tuned: a scenario with a [map] table, every grid point in grid order
@@ -74,11 +75,11 @@ fmu_parameters(row).
 
 EPILOG = """\
 examples:
-  djl-fmu tune X --single                      scenario X's move, DJL robust (+/-10 %)
+  djl-fmu tune X --single                      scenario X's move, DJL robust (default +/-10 %)
   djl-fmu tune X --single --tuning djl=optimal,jl=optimal
   djl-fmu tune sweep-X --tuning paper          the 50 cases of the test set, paper's rule
   djl-fmu tune X --max-moves 200 --workers 2   the first 200 moves of X's [map] grid
-  djl-fmu tune my_axis.toml --map-error 0.15 --scheduler tcp://10.0.0.5:8786
+  djl-fmu tune my_axis.toml --uncertainty map_scale=0.15 --scheduler tcp://10.0.0.5:8786
 
 Exit status: 0 on success, 2 for a bad scenario or option (nothing tuned, nothing
 written), 1 if a move fails, a result is not finite or the outputs cannot be written
@@ -110,8 +111,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="TOML scenario file, or an embedded scenario name (X, Y, sweep-X, "
                         "sweep-Y)")
     add_tuning_option(p, "pick")
-    add_map_error_option(p, "uncertainty of the robust method and of the worst-case residuals")
     add_uncertainty_option(p)
+    add_map_error_option(p, "uncertainty of the robust method and of the worst-case residuals")
     p.add_argument("--single", action="store_true",
                    help="tune the scenario's own move only, whatever its [map] or [sweep]")
     add_out_option(p, "tune")
@@ -133,11 +134,11 @@ def run(args: argparse.Namespace) -> int:
         djl, jl = parse_tuning(args.tuning)
     except ValueError as e:
         raise CommandError(2, f"--tuning {args.tuning}: {e}") from None
-    check_map_error_option(args.map_error)
+    unc = uncertainty_option(args.uncertainty, args.map_error)
     (sc,), (stem,) = load_scenarios([args.scenario], None, None, args.out)
-    (sc,) = apply_uncertainty([sc], args.uncertainty)
+    (sc,) = apply_uncertainty([sc], unc)
     try:
-        sc = with_methods(sc, djl, jl, args.map_error)
+        sc = with_methods(sc, djl, jl)
     except ValueError as e:
         raise CommandError(2, f"scenario {sc.name} ({sc.source}): {e}") from None
     try:
@@ -161,9 +162,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         with make_executor(workers, args.scheduler) as ex:
             try:
-                tab = tune_table(sc, djl_method=djl, jl_method=jl, map_error=args.map_error,
-                                 max_moves=args.max_moves, progress=not args.quiet,
-                                 executor=ex, single=args.single)
+                tab = tune_table(sc, djl_method=djl, jl_method=jl, max_moves=args.max_moves,
+                                 progress=not args.quiet, executor=ex, single=args.single)
             except (TuneError, ValueError, OSError) as e:
                 raise CommandError(1, f"tuning failed ({sc.name}): {e}") from None
     except ExecutorError as e:

@@ -39,10 +39,11 @@ For one scenario (:mod:`harness.scenario`), :func:`compare_scenario`
    instants, so an input shaper's off-sample delays are not smeared), and
    measures it with :func:`harness.cosim.profile_metrics` in the same band;
 4. measures every method against a map error on the time-varying plant: the
-   whole f(z) map scaled by 1 + e, e in ±20 %, each reference planned once on
-   the nominal map (:func:`reference_map_error_residuals` for the peers,
+   whole f(z) map scaled by 1 + e, e in ±2·m (m the map scale of the
+   scenario's uncertainty, 0.1 by default: ±20 %), each reference planned once
+   on the nominal map (:func:`reference_map_error_residuals` for the peers,
    :func:`harness.robustness.map_error_residuals` for AL / JL / DJL), and
-   its worst case over ±10 %;
+   its worst case over ±m;
 5. computes the residual of every method on a *stationary* mode whose
    frequency deviates from the tuned one (:func:`harness.peers.residual.robustness_curve`).
 
@@ -71,12 +72,13 @@ from ..files import write_csv
 from ..fmu import spec as fmu_spec
 from ..fmu.runner import generate
 from ..recommend import recommend
+from ..results import legacy_columns_note
 from ..robustness import RobustnessResult
 from ..scenario import Scenario, load_scenario
 from ..scoring import peaks, score_uncertainty
 from ..simulation.master import CoSimResult, cosimulate, map_error_residuals
 from ..simulation.session import Session
-from ..uncertainty import DEFAULT_ERRORS, WORST_SPAN, check_map_errors
+from ..uncertainty import check_map_errors, span_text
 from .context import PeerContext, PeerSpec, placed
 from .motion_axis import MotionAxis
 from .registry import ALL_PEERS, OPTIONAL_PEERS, PEERS, build
@@ -105,9 +107,11 @@ __all__ = [
 
 BASE = ("AL", "JL", "DJL")
 
-MAP_ERRORS = DEFAULT_ERRORS
-"""Map errors e of the time-varying robustness curves: -20 % .. +20 %, 1 % apart
-(:data:`harness.uncertainty.DEFAULT_ERRORS`); the worst case is over ±10 %."""
+RUN_UNCERTAINTY = "uncertainty"
+"""``compare_scenario(map_errors=...)``'s default: the map errors of the scenario's
+uncertainty, ±2·map_scale in 41 points
+(:meth:`harness.uncertainty.UncertaintySpec.curve_errors`: -20 % .. +20 %, 1 % apart by
+default); the worst case is over ±map_scale."""
 
 DJL_TUNINGS = ("optimal", "robust")
 """DJL tuning methods added as rows ``DJL (<tuning>)`` when the harness has
@@ -306,10 +310,12 @@ class MethodOutcome:
     peaks : dict
         Largest |v|, |a|, |j| of the reference.
     params : dict
-    worst_10pct : float
-        Largest residual (m) over the map errors within ±10 % on the
-        time-varying plant (the reference planned on the nominal map); NaN
-        when not computed.
+    worst_map_residual : float
+        Largest residual (m) over the map errors within ± the scenario's map
+        scale (``uncertainty.map_scale``, 10 % by default) on the time-varying
+        plant (the reference planned on the nominal map); NaN when not
+        computed.  :attr:`worst_10pct` is its earlier name (the CSV keeps
+        ``worst_residual_10pct_m``).
     residual_worst, settling_worst : float
         Largest residual (m) and worst-case settling time (s) over the
         scenario's uncertainty (its scoring set), in the shared band.
@@ -329,12 +335,17 @@ class MethodOutcome:
     run: Any
     peaks: dict[str, float]
     params: dict[str, Any] = field(default_factory=dict)
-    worst_10pct: float = math.nan
+    worst_map_residual: float = math.nan
     residual_worst: float = math.nan
     settling_worst: float = math.nan
     worst_point: str = ""
     jerk_peak: float = math.nan
     fmu_parameters: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def worst_10pct(self) -> float:
+        """The earlier name of :attr:`worst_map_residual` (over the run's map scale)."""
+        return self.worst_map_residual
 
 
 STATIONARY_LABEL = "stationary mode at f_end (1 + error)"
@@ -395,6 +406,9 @@ class PeerComparison:
         Residual of every method when the whole map f(z) of the plant is
         scaled by 1 + e (time-varying plant, references planned on the
         nominal map); None when not computed.
+    scoring_label : str
+        The scoring set the worst-case settling times are over (the scenario's
+        uncertainty, ``scenario.uncertainty``).
     bound : harness.bound.BoundSummary, optional
         The physical limit: the least worst-case settling time any profile at
         JL's jerk can reach over the scoring set; None when not computed.
@@ -418,8 +432,13 @@ class PeerComparison:
     notes: list[str] = field(default_factory=list)
     motions: dict[str, Any] = field(default_factory=dict)
     recommendation: Any = None
-    uncertainty: str = ""
+    scoring_label: str = ""
     bound: Any = None
+
+    @property
+    def worst_span(self) -> float:
+        """The span of the map-error worst case: the scenario's ``uncertainty.map_scale``."""
+        return float(self.scenario.uncertainty.map_scale)
 
     def rows(self) -> list[dict[str, Any]]:
         """One dict per method (the CSV rows)."""
@@ -439,8 +458,9 @@ class PeerComparison:
                 "settling_time_s": me.settling_time,
                 "rise_time_s": me.rise_time,
                 "band_m": self.band,
-                "worst_residual_10pct_m": mo.worst_10pct,
-                "worst_residual_10pct_pct_of_AL": 100.0 * mo.worst_10pct / ref.residual,
+                # named after the default +/-10 %: the run's span (worst_span), names kept
+                "worst_residual_10pct_m": mo.worst_map_residual,
+                "worst_residual_10pct_pct_of_AL": 100.0 * mo.worst_map_residual / ref.residual,
                 "v_peak_over_v_max": mo.peaks["v"] / sc.move.v_max,
                 "a_peak_over_a_max": mo.peaks["a"] / max(sc.move.a_max, sc.move.d_max),
                 "j_peak_m_s3": mo.peaks["j"],
@@ -451,7 +471,7 @@ class PeerComparison:
                 "worst_point": mo.worst_point,
                 "settling_bound_s": limit,
                 "settling_worst_over_bound": mo.settling_worst / limit,
-                "uncertainty": self.uncertainty,
+                "uncertainty": self.scoring_label,
                 "jerk_peak_m_s3": mo.jerk_peak,
                 "jerk_over_JL": mo.jerk_peak / self.jerk_jl,
                 "jerk_limited": math.isfinite(mo.jerk_peak),
@@ -486,7 +506,7 @@ class PeerComparison:
         al = self.methods["AL"].metrics.residual
         res = {n: mo.metrics.residual for n, mo in self.methods.items()}
         st = {n: mo.metrics.settling_time for n, mo in self.methods.items()}
-        wc = {n: mo.worst_10pct for n, mo in self.methods.items()}
+        wc = {n: mo.worst_map_residual for n, mo in self.methods.items()}
         ws = {n: mo.settling_worst for n, mo in self.methods.items()}
 
         def fmt_res(n: str, v: float) -> str:
@@ -508,10 +528,10 @@ class PeerComparison:
                "  first settled (band +/-" + f"{self.band * 1e3:.3g} mm): "
                + two(_ranking(st, 1e-9), st, fmt_t)]
         if any(math.isfinite(v) for v in wc.values()):
-            out.append("  smallest worst case over +/-10 % map error (" + self.map_error_label
-                       + "): " + two(_ranking(wc, 1e-9 * al), wc, fmt_res))
+            out.append(f"  smallest worst case over +/-{span_text(self.worst_span)} % map error ("
+                       + self.map_error_label + "): " + two(_ranking(wc, 1e-9 * al), wc, fmt_res))
         if any(math.isfinite(v) for v in ws.values()):
-            out.append("  first settled in the worst case (" + self.uncertainty + "): "
+            out.append("  first settled in the worst case (" + self.scoring_label + "): "
                        + two(_ranking(ws, 1e-9), ws, fmt_t))
         if self.bound is not None and any(math.isfinite(v) for v in ws.values()):
             jl_jerk = self.jerk_jl * (1 + 1e-6)
@@ -538,8 +558,9 @@ class PeerComparison:
                  f"  peers tuned to the mode at the end of the motion ({self.f_end:.4g} Hz); "
                  f"time-optimal JL: {self.T_opt:.4g} s "
                  f"(j_max = a_max / T_F(JL))", ""]
+        worst_head = f"worst±{span_text(self.worst_span)}% [mm]"
         head = (f"{'method':<16}{'motion [s]':>11}{'/ t.-opt.':>10}{'residual [mm]':>15}"
-                f"{'% of AL':>9}{'settling [s]':>14}{'worst±10% [mm]':>16}"
+                f"{'% of AL':>9}{'settling [s]':>14}{worst_head:>16}"
                 f"{'worst settle [s]':>18}{'/ bound':>9}{'v/v_max':>9}{'a/a_max':>9}"
                 f"{'j/j_JL':>10}")
         lines += [head, "-" * len(head)]
@@ -563,10 +584,13 @@ class PeerComparison:
         lines.append(f"Settling band +/-{self.band * 1e3:.3g} mm ({self.band_source}); "
                      "residual: free-oscillation amplitude when the reference ends.")
         if self.map_error is not None:
-            lines.append(f"worst±10%: largest residual over map errors e in +/-10 % "
-                         f"({self.map_error_label}; each reference planned on the nominal map).")
-        if self.uncertainty:
-            lines.append(f"worst settle: worst-case settling time over the {self.uncertainty} "
+            pct = span_text(self.worst_span)
+            lines.append(f"worst±{pct}%: largest residual over map errors e in +/-{pct} % "
+                         f"({self.map_error_label}; each reference planned on the nominal map)."
+                         + legacy_columns_note(self.worst_span, "worst_residual_10pct_m, "
+                                                                "worst_residual_10pct_pct_of_AL"))
+        if self.scoring_label:
+            lines.append(f"worst settle: worst-case settling time over the {self.scoring_label} "
                          f"(never the points a method was tuned on); j/j_JL: largest jerk over "
                          f"JL's, 'no limit' where the acceleration steps (AL-based).")
         if self.bound is not None:
@@ -618,10 +642,11 @@ class PeerComparison:
         al = me.residual["AL"]
         worst = {}
         try:
-            worst = me.worst(0.10)
+            worst = me.worst(self.worst_span)
         except ValueError:
             pass
-        ax.axvspan(-10, 10, color="0.92", lw=0)
+        pct = 100.0 * self.worst_span
+        ax.axvspan(-pct, pct, color="0.92", lw=0)
         for k, v in me.residual.items():
             c, ls = _style(k)
             lab = k if k not in worst or percent else f"{k}: worst {worst[k] * 1e3:.3g} mm"
@@ -673,7 +698,8 @@ class PeerComparison:
         ax2.axhline(self.band * 1e3, color="gold", lw=2, label="settling band")
         legend_outside(ax2)
         fig.suptitle(title or f"Scenario {self.scenario.name}: robustness to a map error, "
-                     f"{self.map_error_label} (shaded: +/-10 %, the worst case)",
+                     f"{self.map_error_label} (shaded: +/-{span_text(self.worst_span)} %, the "
+                     "worst case)",
                      fontsize="medium")
         fig.tight_layout()
         return fig
@@ -699,7 +725,8 @@ class PeerComparison:
             ax2 = axes[0, 1]
             self._plot_map(ax2, False)
             ax2.set_ylabel("residual amplitude [mm]")
-            ax2.set_title(self.map_error_label + " (shaded: +/-10 %)", fontsize="medium")
+            ax2.set_title(self.map_error_label + f" (shaded: +/-{span_text(self.worst_span)} %)",
+                          fontsize="medium")
             ax2.axhline(self.band * 1e3, color="gold", lw=2)
         # one legend, right of the panels (the same methods in both): off the data
         legend_outside(axes[0, -1], handles=ax1.get_legend_handles_labels()[0])
@@ -764,7 +791,7 @@ def _T_F_text(T_F: Sequence[float]) -> str:
 
 def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str] = PEERS,
                      errors: np.ndarray | None = None, engine: str = "fmu",
-                     map_errors: Sequence[float] | np.ndarray | None = MAP_ERRORS,
+                     map_errors: Sequence[float] | np.ndarray | str | None = RUN_UNCERTAINTY,
                      map_engine: str = "fast", tuned_djl: bool = True,
                      recommended: bool = True, bound: bool = True) -> PeerComparison:
     """Run AL / JL / DJL and the peers on one (non-sweep) scenario.
@@ -783,11 +810,12 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
     engine : {"fmu", "fast"}
         Engine of the session made when ``session`` is not given (see
         :class:`harness.cosim.Session`).
-    map_errors : array_like or None
+    map_errors : array_like, "uncertainty" or None
         Map errors e of the time-varying robustness (the plant's whole f(z)
-        scaled by 1 + e; default :data:`MAP_ERRORS`, -20 % .. +20 %, 41
-        points); the worst case is taken over the points
-        within ±10 %.  None: not computed.
+        scaled by 1 + e; default ``"uncertainty"``: ±2·map_scale of the
+        scenario's uncertainty in 41 points, -20 % .. +20 % by default); the
+        worst case is taken over the points within ± the map scale.  None: not
+        computed.
     map_engine : {"fast", "fmu"}
         Engine of the map-error runs and of the tuned DJL rows (default the
         fast engine: the same results, many runs).
@@ -813,6 +841,9 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     if sc.is_sweep:
         raise ValueError(f"{sc.name}: compare takes single-move scenarios, not sweeps")
+    if isinstance(map_errors, str) and map_errors != RUN_UNCERTAINTY:
+        raise ValueError(f"map_errors must be map errors, {RUN_UNCERTAINTY!r} or None, got "
+                         f"{map_errors!r}")
     base_cmp: dict[str, Any] = {"profiles": BASE}
     if has_djl_tuning(sc):  # the JL and DJL rows are the harness's usual ones
         base_cmp.update(djl_tuning="paper", jl_tuning="end")
@@ -893,7 +924,8 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
         limit = bound_summary(sc, band, session=msession) if bound else None
         map_result = None
         if map_errors is not None:
-            e = np.asarray(map_errors, dtype=float).ravel()
+            e = (sc.uncertainty.curve_errors() if isinstance(map_errors, str)
+                 else np.asarray(map_errors, dtype=float).ravel())
             res: dict[str, np.ndarray] = {}
             T_F: dict[str, tuple[float, ...] | None] = {}
             for n in BASE:
@@ -909,10 +941,11 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
                 T_F["recommended"] = tuple(rec.best.T_F)
                 res["recommended"] = msession.map_error_residuals(
                     sc, rec.best.profile, rec.best.T_F, e, shaper=rec.best.shaper)
-            map_result = RobustnessResult(e, {n: res[n] for n in methods}, sc, T_F)
-            if np.any(np.abs(e) <= WORST_SPAN + 1e-12):
-                for n, w in map_result.worst(WORST_SPAN).items():
-                    methods[n].worst_10pct = w
+            span = sc.uncertainty.map_scale
+            map_result = RobustnessResult(e, {n: res[n] for n in methods}, sc, T_F, span=span)
+            if np.any(np.abs(e) <= span + 1e-12):
+                for n, w in map_result.worst(span).items():
+                    methods[n].worst_map_residual = w
     finally:
         if own_map:
             msession.close()
@@ -927,7 +960,7 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
     rc = robustness_curve(motions, f_end, zeta, err, reference="AL")
     return PeerComparison(sc, methods, band, base.band_source, T_opt, f_end, zeta, rc, base,
                           map_result, notes, motions, recommendation=rec,
-                          uncertainty=base.uncertainty, bound=limit)
+                          scoring_label=base.scoring_label, bound=limit)
 
 
 def _fmu_parameters(sc: Any, name: str, mo: MethodOutcome, base: Any, built: dict[str, Any],

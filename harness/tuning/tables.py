@@ -268,13 +268,15 @@ def with_methods(sc: Scenario, djl_method: str = DEFAULT_DJL_METHOD,
         JL tuning method.
     map_error : float, optional
         Relative map error in [0, 1) of the robust objective and of the worst
-        residuals (default: the scenario's ``[compare] map_error``).
+        residuals: replaces the scenario's ``uncertainty.map_scale`` (default:
+        keep it; the uncertainty is its only home).
 
     Returns
     -------
     Scenario
-        ``compare`` with these methods and map error, and no imposed jerk
-        times (``JL_T_F``, ``DJL_T_F``: this module computes them).
+        ``compare`` with these methods and no imposed jerk times (``JL_T_F``,
+        ``DJL_T_F``: this module computes them); ``uncertainty`` the scenario's,
+        with ``map_error`` as its map scale when given.
 
     Raises
     ------
@@ -287,12 +289,14 @@ def with_methods(sc: Scenario, djl_method: str = DEFAULT_DJL_METHOD,
     if jl_method not in JL_METHODS:
         raise ValueError(f"unknown JL tuning method {jl_method!r}: choose from "
                          f"{', '.join(JL_METHODS)}")
-    e = check_map_error(sc.compare.map_error if map_error is None else map_error, "the map error")
+    unc = sc.uncertainty
+    if map_error is not None:
+        unc = dataclasses.replace(unc, map_scale=check_map_error(map_error, "the map error"))
     cmp = dataclasses.replace(sc.compare, djl_tuning=djl_method, jl_tuning=jl_method,
-                              map_error=e, JL_T_F=None, DJL_T_F=None)
-    cmp.tuning_options()  # checks the other options
-    return dataclasses.replace(sc, compare=cmp,
-                               uncertainty=dataclasses.replace(sc.uncertainty, map_scale=e))
+                              JL_T_F=None, DJL_T_F=None)
+    out = dataclasses.replace(sc, compare=cmp, uncertainty=unc)
+    out.tuning_options()  # checks the other options
+    return out
 
 
 # ---------------------------------------------------------------- one move
@@ -504,7 +508,8 @@ def tune_table(scenario: Scenario | str | Path, *, djl_method: str = DEFAULT_DJL
         JL tuning method (default ``end``).
     map_error : float, optional
         Relative map error in [0, 1) of the robust objective and of the worst
-        residuals (default: the scenario's ``[compare] map_error``, 0.1).
+        residuals, replacing the scenario's ``uncertainty.map_scale`` (default:
+        the scenario's, 0.1 unless its ``[uncertainty]`` says otherwise).
     workers : int, optional
         Local worker processes (default: every core); 1 runs in this process,
         and so does a single move.
@@ -576,7 +581,7 @@ def _run_on(sc: Scenario, kind: str, points: list[Point], total: int, bs: int, e
 # --------------------------------------------------------------- the header
 
 
-def _uncertainty(sc: Scenario) -> str:
+def _uncertainty_text(sc: Scenario) -> str:
     u = sc.uncertainty
     return (f"{u.describe()} (robust tuning: the {len(u.tuning_set())}-point tuning set; the "
             f"worst_* columns: the {len(u.scoring_set())}-point scoring set)")
@@ -585,7 +590,7 @@ def _uncertainty(sc: Scenario) -> str:
 def _header(sc: Scenario, kind: str, n: int, total: int) -> list[str]:
     """Return the comment lines of the CSV (without the leading ``# ``)."""
     cmp, s = sc.compare, sc.simulation
-    opts = cmp.tuning_options()
+    opts = sc.tuning_options()
     if kind == "map":
         axes = sc.map_axes()
         grid = ("[map] z0 x z_distance x distance x v_max = "
@@ -617,7 +622,7 @@ def _header(sc: Scenario, kind: str, n: int, total: int) -> list[str]:
         f"djl_method_meaning: {METHOD_MEANINGS[cmp.djl_tuning]}",
         f"jl_method: {cmp.jl_tuning}",
         f"jl_method_meaning: {METHOD_MEANINGS[cmp.jl_tuning]}",
-        f"uncertainty: {_uncertainty(sc)}; the worst_* columns are the largest residual "
+        f"uncertainty: {_uncertainty_text(sc)}; the worst_* columns are the largest residual "
         f"over the scoring set, for every method",
         f"map_error: {sc.uncertainty.map_scale:g}",
         "damping_factors: " + (f"{sc.uncertainty.damping[0]:g}..{sc.uncertainty.damping[1]:g}"

@@ -49,14 +49,14 @@ def tune_profile(session: Session, sc: Scenario, profile: str) -> TuningResult |
         jl = tune_jl(session.plan(sc, "JL"), mm.period, Te, mm.period(sc.z.z0 + sc.z.distance))
         if cmp.jl_tuning == "end":
             return jl
-        return tune_optimal(sc, session, "JL", cmp.jl_tuning, None, jl, cmp.tuning_options())
+        return tune_optimal(sc, session, "JL", cmp.jl_tuning, None, jl, sc.tuning_options())
     if profile == "DJL" and cmp.DJL_T_F is None:
         paper = tune_djl(session.plan(sc, "DJL"), mm.period, Te, mm.period(sc.z.z0),
                          rule=cmp.djl_rule)
         if cmp.djl_tuning == "paper":
             return paper
         jl = tune_jl(session.plan(sc, "JL"), mm.period, Te, mm.period(sc.z.z0 + sc.z.distance))
-        return tune_optimal(sc, session, "DJL", cmp.djl_tuning, paper, jl, cmp.tuning_options())
+        return tune_optimal(sc, session, "DJL", cmp.djl_tuning, paper, jl, sc.tuning_options())
     return None
 
 
