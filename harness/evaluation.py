@@ -245,13 +245,11 @@ def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True,
         rec = recommend_profile(sc, session, band, jl=tunings.get("JL"))
         shapers["recommended"] = rec.best.shaper
         jerk["recommended"] = rec.best.T_F
-        runs["recommended"] = session.run(sc, rec.best.profile, rec.best.T_F,
-                                          shaper=rec.best.shaper)
+        runs["recommended"] = rec.run(sc, session)
         tunings["recommended"] = None
         if mode is not None:  # its map-error residuals like the others' (curve or worst case)
             errs = curves.errors if curves is not None else unc.worst_errors()
-            res_e = np.asarray(rs.map_error_residuals(
-                sc, rec.best.profile, rec.best.T_F, errs, shaper=rec.best.shaper), float)
+            res_e = np.asarray(rec.map_error_residuals(sc, rs, errs), float)
             if curves is not None:
                 curves.residual["recommended"] = res_e
                 curves.T_F["recommended"] = tuple(rec.best.T_F)
@@ -263,8 +261,8 @@ def run_case(sc: Scenario, session: Session, *, keep_runs: bool = True,
         met = profile_metrics(run, band, paper_band=paper_band)
         if scoring is not None:
             met = dataclasses.replace(met, **score_uncertainty(run, sc, band, scoring))
-        base = rec.best.profile if prof == "recommended" and rec is not None else prof
-        params = session.move_params(sc, base, jerk[prof], shapers.get(prof))
+        params = rec.fmu_parameters(sc) if prof == "recommended" and rec is not None \
+            else session.move_params(sc, prof, jerk[prof], shapers.get(prof))
         outcomes[prof] = ProfileOutcome(
             prof, run if keep_runs else None, tunings[prof], met, run.T_F, run.z_v_max,
             run.z_synced, plan_info=dict(run.plan_info),

@@ -111,6 +111,17 @@ class IncrementalLP:
         self.rows += k
         return first, self.rows
 
+    def mark(self) -> tuple[int, object]:
+        """Return the current rows and basis, to come back to (:meth:`restore`)."""
+        return self.rows, self.h.getBasis()
+
+    def restore(self, mark: tuple[int, object]) -> None:
+        """Drop the rows added since :meth:`mark` and take its basis back (a warm restart)."""
+        rows, basis = mark
+        self.drop_from(rows)
+        if getattr(basis, "valid", False):
+            self.h.setBasis(basis)
+
     def drop_from(self, first: int) -> None:
         """Remove every row from index ``first`` on (the blocks added last)."""
         if first < self.rows:
@@ -135,5 +146,127 @@ class IncrementalLP:
         if status != st.kOptimal:
             return False
         self.x = np.asarray(self.h.getSolution().col_value, dtype=float)
+        self.value = float(info.objective_function_value)
+        return True
+
+
+class DualIncrementalLP:
+    """:class:`IncrementalLP` solved through its dual: few variables, many rows, warm.
+
+    The primal ``min c·z`` over rows ``lo ≤ a·z ≤ hi`` and bounds is written as
+    ``min c·z  s.t.  G z ≥ g`` (each finite side of a row or bound one row of G),
+    whose dual ``max g·y  s.t.  Gᵀ y = c, y ≥ 0`` has one column per row of G and
+    as many rows as the primal has variables.  Adding primal rows adds dual
+    columns: the last basis stays feasible and HiGHS's primal simplex goes on
+    from it, its basis as small as the primal's variables are few.  The primal
+    solution is the dual's row duals; an unbounded dual is an infeasible primal.
+
+    Parameters
+    ----------
+    lower, upper, cost : array_like
+        As for :class:`IncrementalLP`.
+    """
+
+    def __init__(self, lower: np.ndarray, upper: np.ndarray, cost: np.ndarray) -> None:
+        import highspy  # deferred: see _highs
+
+        self._hs = highspy
+        self.inf = float(highspy.kHighsInf)
+        self.n = int(np.size(cost))
+        self.c = np.asarray(cost, dtype=float)
+        self.h = _highs()
+        self.h.setOptionValue("simplex_strategy", 4)  # primal: columns added keep it feasible
+        self.h.changeObjectiveSense(highspy.ObjSense.kMaximize)
+        self.h.addRows(self.n, self.c, self.c, 0, np.zeros(self.n, dtype=np.int32),
+                       np.zeros(0, dtype=np.int32), np.zeros(0))
+        self.rows = 0          # primal rows added (bounds excluded)
+        self._blocks: list[tuple[int, int]] = []  # (first row, dual columns) of each add
+        eye = np.eye(self.n)
+        self._add(eye, np.asarray(lower, float), np.asarray(upper, float))
+        self.bound_cols = self.h.getNumCol()
+        self.x = np.zeros(self.n)
+        self.value = np.inf
+        self.iterations = 0
+        self.solves = 0
+
+    def _add(self, M: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> int:
+        """Add the dual columns of rows ``lo ≤ M z ≤ hi``; return how many."""
+        cols, costs = [], []
+        for sgn, side in ((1.0, lo), (-1.0, hi)):
+            fin = np.isfinite(side)
+            if fin.any():
+                cols.append(sgn * M[fin])
+                costs.append(sgn * side[fin])
+        if not cols:
+            return 0
+        Gt = np.vstack(cols)  # one dual column per row
+        g = np.concatenate(costs)
+        k = Gt.shape[0]
+        nz = Gt != 0.0
+        starts = np.concatenate(([0], np.cumsum(nz.sum(axis=1))[:-1])).astype(np.int32)
+        rr, cc = np.nonzero(nz)
+        self.h.addCols(k, g, np.zeros(k), np.full(k, self.inf), int(rr.size), starts,
+                       cc.astype(np.int32), Gt[rr, cc])
+        return k
+
+    def add(self, M: np.ndarray, lower: np.ndarray | float, upper: np.ndarray | float
+            ) -> tuple[int, int]:
+        """Add dense rows ``lower ≤ M z ≤ upper``; return their index range."""
+        M = np.atleast_2d(np.asarray(M, dtype=float))
+        k = M.shape[0]
+        lo = np.broadcast_to(np.asarray(lower, dtype=float), (k,)).copy()
+        hi = np.broadcast_to(np.asarray(upper, dtype=float), (k,)).copy()
+        lo[lo <= -self.inf] = -np.inf
+        hi[hi >= self.inf] = np.inf
+        first = self.rows
+        self._blocks.append((first, self._add(M, lo, hi)))
+        self.rows += k
+        return first, self.rows
+
+    def mark(self) -> tuple[int, object]:
+        """Return the current rows and basis, to come back to (:meth:`restore`)."""
+        return self.rows, self.h.getBasis()
+
+    def restore(self, mark: tuple[int, object]) -> None:
+        """Drop the rows added since :meth:`mark` and take its basis back (a warm restart)."""
+        rows, basis = mark
+        self.drop_from(rows)
+        if getattr(basis, "valid", False):
+            self.h.setBasis(basis)
+
+    def drop_from(self, first: int) -> None:
+        """Remove every primal row from index ``first`` on (a block boundary)."""
+        if first >= self.rows:
+            return
+        starts = [b[0] for b in self._blocks]
+        if first not in starts:
+            raise ValueError(f"drop_from({first}): not the start of a block of rows "
+                             f"(blocks start at {starts})")
+        k = 0
+        while self._blocks and self._blocks[-1][0] >= first:
+            k += self._blocks.pop()[1]
+        total = self.h.getNumCol()
+        if k:
+            idx = np.arange(total - k, total, dtype=np.int32)
+            self.h.deleteCols(int(idx.size), idx)
+        self.rows = first
+
+    def solve(self) -> bool:
+        """Solve from the current basis; return True if the primal is optimal."""
+        st = self._hs.HighsModelStatus
+        for fresh in (False, True):
+            if fresh:
+                self.h.clearSolver()
+            self.h.run()
+            self.solves += 1
+            info = self.h.getInfo()
+            self.iterations += int(info.simplex_iteration_count)
+            status = self.h.getModelStatus()
+            if status in (st.kOptimal, st.kInfeasible, st.kUnboundedOrInfeasible,
+                          st.kUnbounded):
+                break
+        if status != st.kOptimal:
+            return False
+        self.x = np.asarray(self.h.getSolution().row_dual, dtype=float)
         self.value = float(info.objective_function_value)
         return True

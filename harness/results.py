@@ -315,10 +315,13 @@ class ScenarioResult(TableMixin):
                 continue
             if p.name == "recommended" and self.recommendation is not None:
                 rec = self.recommendation
+                best: dict[str, float] = {}
+                for c in rec.candidates:
+                    best[c.family] = min(best.get(c.family, math.inf), c.settling_worst)
                 lines.append(f"  recommended: {p.method} (chosen among "
-                             + ", ".join(f"{c.family} {c.settling_worst:.3g} s"
-                                         for c in rec.candidates)
-                             + f": worst-case settling over the {rec.tuning_set})")
+                             + ", ".join(f"{f} {t:.3g} s" for f, t in best.items())
+                             + f": worst-case settling over the {rec.tuning_set}; the rule "
+                               f"and the reasons below)")
                 continue
             if p.tuning is not None:
                 lines.append(f"  {p.tuning.describe()}")
@@ -410,7 +413,18 @@ class ScenarioResult(TableMixin):
                 parts.append(f"worst residual over +/-{span_text(self.worst_span)} % map "
                              f"error {_pct(ch['worst_residual_10pct'], True)}")
             out.append("DJL compared with JL: " + ", ".join(parts) + ".")
+        if self.recommendation is not None:
+            out.append("Why the recommended profile:")
+            out.extend(f"  {x}" for x in self.recommendation.explanation)
+            deg = self.degradation()
+            if deg is not None:
+                out.extend(deg.lines())
         return "\n".join(out)
+
+    def degradation(self):  # -> harness.degradation.Degradation | None
+        """Return the recommended and textbook shapers' worst-case settling vs the error width."""
+        rec = self.recommendation
+        return rec.degradation(self.scenario) if rec is not None else None
 
     # --------------------------------------------------------------- CSV
 

@@ -42,6 +42,7 @@ shaper candidates); :mod:`harness.peers.shapers` convolves it with a profile.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -155,6 +156,7 @@ def mzv(f: float, zeta: float = 0.0) -> Shaper:
     return Shaper("MZV", A / A.sum(), np.array([0.0, 0.375 * Td, 0.75 * Td]), f, zeta)
 
 
+@functools.lru_cache(maxsize=64)
 def ei(f: float, zeta: float = 0.0, V_tol: float = 0.05) -> Shaper:
     """Extra-insensitive shaper with tolerance ``V_tol`` (residual V_tol at the tuned mode)."""
     Td, _ = _check_mode(f, zeta)
@@ -238,6 +240,7 @@ def _best_at(t3: float, A: np.ndarray, ratios: np.ndarray, freqs: np.ndarray,
     return float(V[g, r]), A[g], np.array([0.0, float(t2[r]), t3])
 
 
+@functools.lru_cache(maxsize=64)
 def si_shaper(f: float, zeta: float, band: float, *, v_tol: float = V_TOL) -> Shaper:
     """Return the shortest three-impulse shaper with V ≤ ``v_tol`` over f·(1 ± band).
 

@@ -24,7 +24,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
         "harness", "harness._resources", "harness.errors", "harness.files",
         "harness.executors", "harness.plant", "harness.modemap", "harness.metrics",
         "harness.uncertainty", "harness._engine", "harness.compiled", "harness.scenarios",
-        "harness.shaper_designs", "harness.tables", "harness.figures",
+        "harness.shaper_designs", "harness.tables", "harness.figures", "harness.lp",
         "harness.fmu",
         "harness.fmu.*",
     ),
@@ -32,10 +32,11 @@ LAYERS: dict[str, tuple[str, ...]] = {
     "simulation": ("harness.simulation", "harness.simulation.*"),
     "tuning": ("harness.scoring", "harness.tuning", "harness.tuning.rule",
                "harness.tuning.search", "harness.tuning.tune", "harness.tuning.tables",
-               "harness.tuning.remainder", "harness.tuning.shaping", "harness.tuning.graceful"),
+               "harness.tuning.remainder", "harness.tuning.shaping", "harness.tuning.graceful",
+               "harness.tuning.reference"),
     "studies": ("harness.results", "harness.robustness", "harness.evaluation", "harness.bound",
                 "harness.sweeps", "harness.workspace", "harness.online", "harness.report",
-                "harness.recommend",
+                "harness.recommend", "harness.degradation",
                 "harness.peers", "harness.peers.*", "harness.claims", "harness.claims.*"),
     "commands": ("harness.commands", "harness.commands.*"),
     "cli": ("harness.cli", "harness.release"),
@@ -43,7 +44,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
 """The layers, lowest first; a module may import only from its own layer or lower ones."""
 
 DEFERRABLE = ("matplotlib", "control", "scipy", "fmpy", "distributed", "ruckig", "pandas",
-              "harness._engine")
+              "highspy", "harness._engine")
 """What an import inside a function may load: heavy or optional dependencies only."""
 
 

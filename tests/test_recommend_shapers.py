@@ -1,6 +1,13 @@
-"""The LP-designed shapers of the recommendation (harness.tuning.shaping.optimal_shaper).
+"""The recommendation (harness.recommend) and its LP designs: shapers and references.
 
 Every claim is checked by a path independent of the design's own objective:
+
+* the recommended profile (issue 33): within 10 % of the physical limit on X
+  and Y; at an actual map error of 0, 1, 1.5 and 2 times the stated one no
+  worse than any textbook shaper (JL*ZV, ZVD, EI, SI built as ``compare``
+  builds them, exact delays); with an unmodelled second mode at 2.5, 4 and 6
+  times the first, at most 5 % slower than the best of them -- every plant
+  re-stepped and measured by :func:`harness.scoring.settling_of`;
 
 * the family: amplitudes summing to 1 (all >= 0 for the positive family, in
   [-1, 1] for the signed one), whole-sample delays from 0, at most 8 impulses
@@ -29,6 +36,8 @@ import pytest
 
 from harness.evaluation import run_case
 from harness.modemap import LinearLaw, ModeMap, ModeSpec
+from harness.peers.compare import build_peers
+from harness.peers.motion_axis import cosimulate_reference
 from harness.recommend import recommend
 from harness.scenario import load_scenario
 from harness.scoring import peaks, score_uncertainty, settling_of
@@ -37,7 +46,7 @@ from harness.simulation.session import Session
 from harness.simulation.shaped_axis import ShaperSpec
 from harness.tuning.shaping import ShapedObjective, _MinimaxLP, optimal_shaper
 from harness.tuning.tune import tune_profile
-from harness.uncertainty import UncertaintySpec
+from harness.uncertainty import Perturbation, UncertaintySpec
 
 BOUND = {"X": 1.039, "Y": 0.683}
 """``harness.bound.settling_bound`` of X and Y over their scoring sets (s): the least
@@ -129,14 +138,35 @@ def test_a_span_too_short_to_settle_within_the_motion_has_no_design(fast, cases)
         optimal_shaper(sc, fast, "JL", tuple(jl.T_F), band, spans=(88,), margin=1.0)
 
 
+@pytest.fixture(scope="module")
+def recs(fast, cases):
+    """X's and Y's recommendations (designed once, here, without the disk cache)."""
+    out = {}
+    for name in ("X", "Y"):
+        sc, band, jl, _ = cases[name]
+        out[name] = recommend(sc, fast, band, jl=jl, cache=False)
+    return out
+
+
+@pytest.fixture(scope="module")
+def textbooks(fast, cases):
+    """The textbook shapers a user would pick, built as compare builds them (exact delays)."""
+    out = {}
+    for name in ("X", "Y"):
+        sc, band, jl, jl_run = cases[name]
+        built = build_peers(sc, jl.T_F[0], jl_run.motion_time, session=fast,
+                            peers=("JL*ZV", "JL*ZVD", "JL*EI", "JL*SI"))
+        out[name] = {n: mot for n, (mot, _) in built.items()}
+    return out
+
+
 @pytest.mark.parametrize("name", ["X", "Y"])
-def test_recommended_is_within_10_percent_of_the_bound(fast, cases, name):
+def test_recommended_is_within_10_percent_of_the_bound(fast, cases, recs, name):
     sc, band, jl, jl_run = cases[name]
-    rec = recommend(sc, fast, band, jl=jl, cache=False)
+    rec = recs[name]
     b = rec.best
-    assert b.family == "JL*shaper" and b.shaper is not None
-    check_family(b.shaper, True, sc.simulation.Te)
-    run = fast.run(sc, b.profile, b.T_F, shaper=b.shaper)
+    assert b.family == "LP reference" and b.profile == "table" and b.shaper is None
+    run = rec.run(sc, fast)
     check_bounds(sc, run, jl_run)
     assert run.free_amplitude <= jl_run.free_amplitude
     # chosen on the tuning set: what it claims there
@@ -147,6 +177,78 @@ def test_recommended_is_within_10_percent_of_the_bound(fast, cases, name):
     assert worst == pytest.approx(score_uncertainty(run, sc, band)["settling_time_worst"],
                                   abs=1e-9)
     assert worst <= 1.10 * BOUND[name]
+    # the FMU's table: its pieces, the jerk of each
+    p = rec.fmu_parameters(sc)
+    assert p["profile"] == 4 and p["table_n"] == len(p["table_samples"]) <= 256
+    assert sum(p["table_samples"]) * sc.simulation.Te == pytest.approx(b.motion_time)
+
+
+def worst_within(fast, sc, run, band, w):
+    """Worst settling over the map errors |e| <= w (81 points), every plant re-stepped."""
+    pts = [Perturbation(scale=float(e)) for e in np.linspace(-w, w, 81)]
+    return worst_settling(fast, sc, run, band, pts)
+
+
+@pytest.mark.parametrize("name", ["X", "Y"])
+@pytest.mark.parametrize("factor", [0.0, 1.0, 1.5, 2.0])
+def test_recommended_is_no_worse_than_a_textbook_shaper_at_any_width(
+        fast, cases, recs, textbooks, name, factor):
+    """Issue 33: at an actual error of 0, 1, 1.5, 2 times the stated one, no textbook
+    shaper (JL*ZV, ZVD, EI, SI, exact delays) settles sooner in the worst case."""
+    sc, band, _, _ = cases[name]
+    w = factor * sc.uncertainty.map_scale
+    rec = worst_within(fast, sc, recs[name].run(sc, fast), band, w)
+    best = min(worst_within(fast, sc, cosimulate_reference(sc, fast, mot, n), band, w)
+               for n, mot in textbooks[name].items())
+    assert rec <= best + 1e-9, (name, factor, rec, best)
+
+
+def with_second_mode(sc, k):
+    first = sc.modemap.modes[0]
+    second = ModeSpec(first.law, 0.02, 0.3 * first.gain, first.mass_ratio / k**2,
+                      name=f"unmodelled {k}x")
+    return dataclasses.replace(sc, modemap=ModeMap((first, second), 0))
+
+
+@pytest.mark.parametrize("name", ["X", "Y"])
+@pytest.mark.parametrize("k", [2.5, 4.0, 6.0])
+def test_an_unmodelled_mode_costs_no_more_than_with_a_textbook_shaper(
+        fast, cases, recs, textbooks, name, k):
+    """Issue 33: a second mode at k x the first (zeta 0.02, gain 0.3, following z), on the
+    exact map and over the stated set: at most 5 % slower than the best textbook shaper."""
+    sc, band, _, _ = cases[name]
+    sc2 = with_second_mode(sc, k)
+    rec = recs[name]
+    run = rec.run(sc2, fast)
+    for pts in ((Perturbation(),), sc.uncertainty.scoring_set().points):
+        mine = worst_settling(fast, sc2, run, band, pts)
+        best = min(worst_settling(fast, sc2, cosimulate_reference(sc2, fast, mot, n), band,
+                                  pts) for n, mot in textbooks[name].items())
+        assert mine <= 1.05 * best, (name, k, len(pts), mine, best)
+
+
+def test_the_recommendation_explains_itself(cases, recs):
+    sc, *_ = cases["X"]
+    rec = recs["X"]
+    text = "\n".join(rec.explanation)
+    assert "graceful first" in text and "no worse than every textbook shaper" in text
+    assert "DJL (robust)" in text and "motion time" in text
+    w, who = rec.holds_to()
+    assert w == pytest.approx(2.0) and who == ""
+    deg = rec.degradation(sc)
+    assert deg is not None and deg.holds_to() == (w, who)
+    assert rec.best.quiet <= 1.0 + 1e-6 and rec.best.excess <= 1.0 + 1e-3
+
+
+def test_a_cached_recommendation_is_the_same(fast, cases, tmp_path, monkeypatch):
+    monkeypatch.setenv("DJL_FMU_CACHE", str(tmp_path))
+    sc, band, jl, _ = cases["Y"]
+    first = recommend(sc, fast, band, jl=jl)
+    again = recommend(sc, fast, band, jl=jl)
+    assert "from the cache" in again.notes
+    assert repr(again.best) == repr(first.best)  # repr: NaN fields (not scored) compare too
+    assert repr(again.candidates) == repr(first.candidates)
+    assert again.explanation == first.explanation and again.widths == first.widths
 
 
 def test_positive_only_recommendation_keeps_amplitudes_positive(fast, cases):
@@ -155,12 +257,11 @@ def test_positive_only_recommendation_keeps_amplitudes_positive(fast, cases):
     for c in rec.candidates:
         if c.shaper is not None:
             assert min(c.shaper.amplitudes) >= 0.0, c.label(sc.simulation.Te)
-    b = rec.best
-    run = fast.run(sc, b.profile, b.T_F, shaper=b.shaper)
+    run = rec.run(sc, fast)
     check_bounds(sc, run, jl_run)
-    # the LP's positive design beats the three-impulse search's 0.775 s (before it)
+    # beats the three-impulse search's 0.775 s and the positive LP shaper's 0.762 s
     worst = worst_settling(fast, sc, run, band, sc.uncertainty.scoring_set().points)
-    assert worst < 0.770
+    assert worst < 0.760
 
 
 def two_modes(sc):

@@ -277,6 +277,11 @@ def run(args: argparse.Namespace) -> int:
             if r.map_error is not None:
                 write_csv(o.path(f"{stem}-map-error.csv"), r.map_error_rows())
             write_csv(o.path(f"{stem}-robustness.csv"), r.robustness_rows())
+            deg = r.degradation()
+            if deg is not None:
+                write_csv(o.path(f"{stem}-degradation.csv"), deg.rows())
+                if not args.no_plot:
+                    save_figure(deg.plot(), o.path(f"{stem}-degradation.png"))
             if not args.no_plot:
                 if r.map_error is not None:
                     save_figure(r.plot_map_error(), o.path(f"{stem}-map-error.png"))

@@ -197,6 +197,9 @@ def run(args: argparse.Namespace) -> int:
                 rob = getattr(r, "robustness", None)
                 if rob is not None:
                     write_csv(o.path(f"{stem}-robustness.csv"), rob.rows())
+                deg = r.degradation() if hasattr(r, "degradation") else None
+                if deg is not None:
+                    write_csv(o.path(f"{stem}-degradation.csv"), deg.rows())
             for name in figures:
                 shutil.copyfile(staging / name, o.path(name))
             if sweeps:
@@ -227,10 +230,15 @@ def _scenario_task(sc, stem: str, staging: Path, progress: bool, engine: str | N
         if rob is not None:
             names.append(save_figure(rob.plot(), staging / f"{stem}-robustness.png",
                                      cache=cache, salt=salt).name)
+        deg = r.degradation() if hasattr(r, "degradation") else None
+        if deg is not None:
+            names.append(save_figure(deg.plot(), staging / f"{stem}-degradation.png",
+                                     cache=cache, salt=salt).name)
     return r, names
 
 
-_PLOT_SOURCES = ("simulation/plots.py", "results.py", "robustness.py", "files.py")
+_PLOT_SOURCES = ("simulation/plots.py", "results.py", "robustness.py", "files.py",
+                 "degradation.py")
 """The modules that draw simulate's figures (their digest is in each cached figure's key)."""
 
 

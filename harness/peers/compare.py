@@ -69,23 +69,21 @@ from ..bound import bound_summary
 from ..evaluation import profile_metrics, run_case
 from ..figures import legend_outside
 from ..files import write_csv
-from ..fmu import spec as fmu_spec
-from ..fmu.runner import generate
-from ..recommend import recommend
+from ..recommend import recommend, table_of
 from ..results import legacy_columns_note
 from ..robustness import RobustnessResult
 from ..scenario import Scenario, load_scenario
 from ..scoring import peaks, score_uncertainty
-from ..simulation.master import CoSimResult, cosimulate, map_error_residuals
 from ..simulation.session import Session
-from ..uncertainty import check_map_errors, span_text
+from ..uncertainty import span_text
 from .context import PeerContext, PeerSpec, placed
-from .motion_axis import MotionAxis
+from .motion_axis import cosimulate_reference, reference_map_error_residuals
 from .registry import ALL_PEERS, OPTIONAL_PEERS, PEERS, build
 from .residual import RobustnessCurve, robustness_curve
 from .ruckig_ref import time_optimal
 from .sato import sato_design
-from .trajectory import Motion, PiecewiseJerk, SampledTrajectory, from_fmu
+from .shapers import base_motion
+from .trajectory import Motion, PiecewiseJerk, SampledTrajectory
 
 __all__ = [
     "ALL_PEERS",
@@ -119,51 +117,6 @@ DJL_TUNINGS = ("optimal", "robust")
 
 
 # ------------------------------------------------------------------ building
-
-
-def base_motion(sc: Any, profile: str, T_F: float | None = None, distance: float | None = None,
-                *, session: Any = None, fmu: Any = None, fmi_version: int = 2) -> PiecewiseJerk:
-    """Return the generator's AL or JL profile of the scenario's move, as an exact motion.
-
-    Parameters
-    ----------
-    sc : harness.scenario.Scenario
-    profile : {"AL", "JL"}
-    T_F : float, optional
-        JL jerk time (s), all four stages.
-    distance : float, optional
-        Signed distance (m); default the scenario's.
-    session : harness.cosim.Session, optional
-        Plan with its excited axis (FMU or fast engine); otherwise through
-        :func:`harness.fmu.runner.generate` with ``fmu`` / ``fmi_version``.
-    fmu, fmi_version
-        Generator FMU when no session is given (default: the scenario's).
-
-    Returns
-    -------
-    PiecewiseJerk
-        Rebuilt exactly from the samples, then :meth:`~PiecewiseJerk.simplified`
-        (one breakpoint per stage boundary).
-    """
-    m, s = sc.move, sc.simulation
-    if profile not in ("AL", "JL"):
-        raise ValueError(f"base profile must be AL or JL, got {profile!r}")
-    params: dict[str, Any] = {
-        "profile": fmu_spec.PROFILE_CODES[profile], "Te": s.Te, "t_start": m.t_start, "x0": m.x0,
-        "distance": m.distance if distance is None else float(distance), "v_max": m.v_max,
-        "a_max": m.a_max, "d_max": m.d_max, "short_stage": s.short_stage}
-    if profile == "JL":
-        if T_F is None:
-            raise ValueError("JL needs its jerk time T_F")
-        params.update({f"T_F{i}": float(T_F) for i in range(1, 5)})
-    if session is not None:
-        ms = session.axis.sample(params)
-        mot = PiecewiseJerk.from_samples(ms.t, ms.x, ms.v, ms.a, ms.j, name=profile,
-                                         params=params)
-    else:
-        tr = generate(params, fmu=s.fmu if fmu is None else fmu, fmi_version=fmi_version)
-        mot = from_fmu(tr, name=profile).to_motion()  # type: ignore[assignment]
-    return mot.simplified()
 
 
 def build_peers(sc: Any, T_F_JL: float, motion_time_JL: float, *,
@@ -219,71 +172,6 @@ def build_peers(sc: Any, T_F_JL: float, motion_time_JL: float, *,
 
 
 # ------------------------------------------------------------ co-simulation
-
-
-def _reference_axis(sc: Any, motion: Motion) -> MotionAxis:
-    return MotionAxis(motion, Te=sc.simulation.Te, x0=sc.move.x0, distance=sc.move.distance)
-
-
-def cosimulate_reference(sc: Any, session: Any, motion: Motion, label: str,
-                         t_stop: float | None = None) -> CoSimResult:
-    """Step the Z generator and the scenario's plant with a precomputed reference.
-
-    The master of every run (:func:`harness.simulation.master.cosimulate`)
-    with the exact ``motion`` in place of the excited axis' generator
-    (:class:`~harness.peers.motion_axis.MotionAxis`); everything else is the
-    same: the Z move (synchronised with the motion time when the scenario asks
-    for it), the scheduled plant, the mode frozen over each communication step
-    at the Z position of mid-step.  Within a step the plant's input is exact:
-    the step is split at the motion's breakpoints (acceleration steps or jerk
-    changes between samples, e.g. the delayed copies of an input shaper) and
-    each piece is advanced with its own linear acceleration.
-
-    Returns
-    -------
-    harness.simulation.master.CoSimResult
-    """
-    v_z, synced = session.z_velocity(sc, motion.motion_time)
-    T_z = session.z_axis.plan(session.z_move_params(sc, v_z))
-    if t_stop is None:
-        t_stop = sc.move.t_start + max(motion.motion_time, T_z) + sc.simulation.t_after
-    run = cosimulate(_reference_axis(sc, motion), session.z_axis, sc.modemap.scheduled(),
-                     t_stop, sc.simulation.step, profile=label)
-    run.z_synced = synced
-    return run
-
-
-def reference_map_error_residuals(sc: Any, session: Any, motion: Motion,
-                                  errors: Sequence[float] | np.ndarray) -> np.ndarray:
-    """Residual of a precomputed reference when the whole mode map is off by 1 + e.
-
-    The reference is the one planned on the nominal map, the Z move the same
-    (it does not depend on the map); only the plant's frequencies are scaled,
-    and it is stepped to the end of the reference once per error
-    (:func:`harness.simulation.master.map_error_residuals`, as for AL / JL /
-    DJL).
-
-    Parameters
-    ----------
-    sc : harness.scenario.Scenario
-        The nominal scenario.
-    session : harness.simulation.session.Session
-        Its Z axis.
-    motion : Motion
-        The reference (planned on the nominal map).
-    errors : array_like
-        Relative map errors e (> -1).
-
-    Returns
-    -------
-    ndarray
-        Residual (m) for each error.
-    """
-    e = check_map_errors(errors)
-    v_z, _ = session.z_velocity(sc, motion.motion_time)
-    session.z_axis.plan(session.z_move_params(sc, v_z))
-    return map_error_residuals(_reference_axis(sc, motion), session.z_axis,
-                               sc.modemap.scheduled(), 1.0 + e, sc.simulation.step)
 
 
 def _run_samples(run: Any, name: str) -> SampledTrajectory:
@@ -601,7 +489,20 @@ class PeerComparison:
         lines.extend(f"  note: {n}" for n in self.notes)
         lines.append("")
         lines.extend(self.verdict())
+        rec = self.recommendation
+        if rec is not None:
+            lines.append("")
+            lines.append("Why the recommended profile:")
+            lines.extend(f"  {x}" for x in rec.explanation)
+            deg = rec.degradation(sc)
+            if deg is not None:
+                lines.extend(deg.lines())
         return "\n".join(lines)
+
+    def degradation(self):  # -> Degradation | None
+        """Return the worst-case settling of the recommended and textbook shapers vs width."""
+        rec = self.recommendation
+        return rec.degradation(self.scenario) if rec is not None else None
 
     def to_csv(self, path: Any) -> Any:
         """Write :meth:`rows` as CSV; return the path.
@@ -903,7 +804,7 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
         if recommended:
             rec = recommend(sc, msession, band, jl=jl.tuning)
             b = rec.best
-            run = session.run(sc, b.profile, b.T_F, shaper=b.shaper)
+            run = rec.run(sc, session)
             st = _run_samples(run, "recommended")
             methods["recommended"] = MethodOutcome(
                 "recommended", f"{b.family}: {b.label(sc.simulation.Te)}",
@@ -911,7 +812,8 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
                 {"family": b.family, "T_F": list(b.T_F),
                  "shaper_amplitude": list(b.shaper.amplitudes) if b.shaper else [],
                  "shaper_delay_s": list(b.shaper.delays_s(sc.simulation.Te))
-                 if b.shaper else []})
+                 if b.shaper else [],
+                 "table_pieces": len(table_of(b.jerk)[0])})
             motions["recommended"] = st
         # every method over the scenario's uncertainty (scoring set), in the shared band
         for n, mo in methods.items():
@@ -939,8 +841,7 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
                 res[n] = reference_map_error_residuals(sc, msession, mot, e)
             if rec is not None:
                 T_F["recommended"] = tuple(rec.best.T_F)
-                res["recommended"] = msession.map_error_residuals(
-                    sc, rec.best.profile, rec.best.T_F, e, shaper=rec.best.shaper)
+                res["recommended"] = rec.map_error_residuals(sc, msession, e)
             span = sc.uncertainty.map_scale
             map_result = RobustnessResult(e, {n: res[n] for n in methods}, sc, T_F, span=span)
             if np.any(np.abs(e) <= span + 1e-12):

@@ -14,15 +14,17 @@ linear acceleration -- the plant's exact update.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
 from ..simulation.axis import InputsHook, MoveSamples, PlantInput, PointSamples, StopHook
+from ..simulation.master import CoSimResult, cosimulate, map_error_residuals
+from ..uncertainty import check_map_errors
 from .trajectory import Motion
 
-__all__ = ["MotionAxis"]
+__all__ = ["MotionAxis", "cosimulate_reference", "reference_axis", "reference_map_error_residuals"]
 
 
 class MotionAxis:
@@ -131,3 +133,69 @@ class MotionAxis:
 
     def close(self) -> None:
         """Nothing to free."""
+
+
+def reference_axis(sc: Any, motion: Motion) -> MotionAxis:
+    """Return the motion as an axis of the scenario's excited axis (its Te, start, length)."""
+    return MotionAxis(motion, Te=sc.simulation.Te, x0=sc.move.x0, distance=sc.move.distance)
+
+
+def cosimulate_reference(sc: Any, session: Any, motion: Motion, label: str,
+                         t_stop: float | None = None) -> CoSimResult:
+    """Step the Z generator and the scenario's plant with a precomputed reference.
+
+    The master of every run (:func:`harness.simulation.master.cosimulate`)
+    with the exact ``motion`` in place of the excited axis' generator
+    (:class:`~harness.peers.motion_axis.MotionAxis`); everything else is the
+    same: the Z move (synchronised with the motion time when the scenario asks
+    for it), the scheduled plant, the mode frozen over each communication step
+    at the Z position of mid-step.  Within a step the plant's input is exact:
+    the step is split at the motion's breakpoints (acceleration steps or jerk
+    changes between samples, e.g. the delayed copies of an input shaper) and
+    each piece is advanced with its own linear acceleration.
+
+    Returns
+    -------
+    harness.simulation.master.CoSimResult
+    """
+    v_z, synced = session.z_velocity(sc, motion.motion_time)
+    T_z = session.z_axis.plan(session.z_move_params(sc, v_z))
+    if t_stop is None:
+        t_stop = sc.move.t_start + max(motion.motion_time, T_z) + sc.simulation.t_after
+    run = cosimulate(reference_axis(sc, motion), session.z_axis, sc.modemap.scheduled(),
+                     t_stop, sc.simulation.step, profile=label)
+    run.z_synced = synced
+    return run
+
+
+def reference_map_error_residuals(sc: Any, session: Any, motion: Motion,
+                                  errors: Sequence[float] | np.ndarray) -> np.ndarray:
+    """Residual of a precomputed reference when the whole mode map is off by 1 + e.
+
+    The reference is the one planned on the nominal map, the Z move the same
+    (it does not depend on the map); only the plant's frequencies are scaled,
+    and it is stepped to the end of the reference once per error
+    (:func:`harness.simulation.master.map_error_residuals`, as for AL / JL /
+    DJL).
+
+    Parameters
+    ----------
+    sc : harness.scenario.Scenario
+        The nominal scenario.
+    session : harness.simulation.session.Session
+        Its Z axis.
+    motion : Motion
+        The reference (planned on the nominal map).
+    errors : array_like
+        Relative map errors e (> -1).
+
+    Returns
+    -------
+    ndarray
+        Residual (m) for each error.
+    """
+    e = check_map_errors(errors)
+    v_z, _ = session.z_velocity(sc, motion.motion_time)
+    session.z_axis.plan(session.z_move_params(sc, v_z))
+    return map_error_residuals(reference_axis(sc, motion), session.z_axis,
+                               sc.modemap.scheduled(), 1.0 + e, sc.simulation.step)

@@ -17,13 +17,14 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from ..fmu import spec as fmu_spec
 from ..fmu.runner import generate
 from ..shaper_designs import SHAPERS, Shaper, ei, make_shaper, mzv, zv, zvd
 from .context import PeerContext, PeerSpec
 from .trajectory import PiecewiseJerk, SampledTrajectory, from_fmu
 
-__all__ = ["SHAPERS", "Shaper", "al_profile", "build_shaped", "ei", "make_shaper", "mzv",
-           "shape", "shaped_al", "zv", "zvd"]
+__all__ = ["SHAPERS", "Shaper", "al_profile", "base_motion", "build_shaped", "ei", "make_shaper",
+           "mzv", "shape", "shaped_al", "zv", "zvd"]
 
 def shape(motion: PiecewiseJerk, shaper: Shaper, *, Te: float | None = None,
           name: str | None = None) -> PiecewiseJerk:
@@ -103,3 +104,48 @@ def build_shaped(ctx: PeerContext, name: str) -> tuple[PiecewiseJerk, PeerSpec]:
     return mot, PeerSpec(name, f"{jl_txt}{ctx.mode_text}; adds {sh.duration * 1e3:.0f} ms",
                          {"f": ctx.f_end, "zeta": ctx.zeta, "A": sh.A.tolist(),
                           "t": sh.t.tolist()})
+
+
+def base_motion(sc: Any, profile: str, T_F: float | None = None, distance: float | None = None,
+                *, session: Any = None, fmu: Any = None, fmi_version: int = 2) -> PiecewiseJerk:
+    """Return the generator's AL or JL profile of the scenario's move, as an exact motion.
+
+    Parameters
+    ----------
+    sc : harness.scenario.Scenario
+    profile : {"AL", "JL"}
+    T_F : float, optional
+        JL jerk time (s), all four stages.
+    distance : float, optional
+        Signed distance (m); default the scenario's.
+    session : harness.cosim.Session, optional
+        Plan with its excited axis (FMU or fast engine); otherwise through
+        :func:`harness.fmu.runner.generate` with ``fmu`` / ``fmi_version``.
+    fmu, fmi_version
+        Generator FMU when no session is given (default: the scenario's).
+
+    Returns
+    -------
+    PiecewiseJerk
+        Rebuilt exactly from the samples, then :meth:`~PiecewiseJerk.simplified`
+        (one breakpoint per stage boundary).
+    """
+    m, s = sc.move, sc.simulation
+    if profile not in ("AL", "JL"):
+        raise ValueError(f"base profile must be AL or JL, got {profile!r}")
+    params: dict[str, Any] = {
+        "profile": fmu_spec.PROFILE_CODES[profile], "Te": s.Te, "t_start": m.t_start, "x0": m.x0,
+        "distance": m.distance if distance is None else float(distance), "v_max": m.v_max,
+        "a_max": m.a_max, "d_max": m.d_max, "short_stage": s.short_stage}
+    if profile == "JL":
+        if T_F is None:
+            raise ValueError("JL needs its jerk time T_F")
+        params.update({f"T_F{i}": float(T_F) for i in range(1, 5)})
+    if session is not None:
+        ms = session.axis.sample(params)
+        mot = PiecewiseJerk.from_samples(ms.t, ms.x, ms.v, ms.a, ms.j, name=profile,
+                                         params=params)
+    else:
+        tr = generate(params, fmu=s.fmu if fmu is None else fmu, fmi_version=fmi_version)
+        mot = from_fmu(tr, name=profile).to_motion()  # type: ignore[assignment]
+    return mot.simplified()

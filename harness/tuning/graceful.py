@@ -20,8 +20,9 @@ is held to outside the stated model:
   assumes about modes above the modelled ones -- any mode between 2 and 8
   times the highest modelled one (following z, damping ratio 0.02 or more,
   gain up to 0.3 of it) -- and keeps: no such mode is left a residual after
-  the motion larger than JL's own (or than 10 % of the band), on the nominal
-  map and at the edges of the stated map scale.  A signed shaper's closely
+  the motion larger than the least that JL or a textbook shaper leaves it (or
+  than 10 % of the band), on the nominal map and at the edges of the stated
+  map scale.  A signed shaper's closely
   spaced impulses excite high frequencies that JL alone leaves alone (X: three
   times JL's residual at 2.5-3.5x); this keeps them quiet.
 """
@@ -50,8 +51,8 @@ from ..uncertainty import (
 )
 from .shaping import Quiet, ShapedObjective
 
-__all__ = ["OUTER_LEVELS", "TEXTBOOK", "TOP", "UnmodelledModes", "Yardstick", "design_points",
-           "textbook_shapers"]
+__all__ = ["OUTER_LEVELS", "TEXTBOOK", "TOP", "UnmodelledModes", "Yardstick", "dense_points",
+           "design_points", "textbook_shapers"]
 
 TEXTBOOK = ("ZV", "ZVD", "EI", "SI")
 """The textbook shapers of the yardstick (on JL, at the tuned mode at the end of the motion)."""
@@ -125,6 +126,27 @@ def design_points(spec: UncertaintySpec, tuning: Sequence[Perturbation],
     return tuple(pts)
 
 
+def dense_points(spec: UncertaintySpec, tuning: Sequence[Perturbation], factor: int = 4
+                 ) -> tuple[Perturbation, ...]:
+    """Return the tuning set with the map scale ``factor`` times as dense.
+
+    A design held exactly at the band at a few points leaves it between them:
+    the phase of the oscillation turns by about a radian between two points of
+    the tuning set when the damping is low.  The points added lie between the
+    tuning set's (none is a point of the scoring set but those the tuning set
+    already shares with it).
+    """
+    pts = list(tuning)
+    e = spec.map_scale
+    if e > 0:
+        n = 8 * factor + 1
+        for x in np.linspace(-e, e, n):
+            p = Perturbation(scale=float(x))
+            if p not in pts:
+                pts.append(p)
+    return tuple(pts)
+
+
 def _product(axes: list[tuple[float, float]]) -> list[tuple[float, ...]]:
     out: list[tuple[float, ...]] = [()]
     for ax in axes:
@@ -165,7 +187,8 @@ class Yardstick:
 
     @classmethod
     def measure(cls, sc: Scenario, session: Session, T_F: Sequence[float], band: float,
-                shapers: dict[str, ShaperSpec] | None = None, top: float = TOP) -> Yardstick:
+                shapers: dict[str, ShaperSpec] | None = None, top: float = TOP,
+                runs: dict[str, object] | None = None) -> Yardstick:
         """Run each textbook shaper on JL and score it at every point of the sweeps.
 
         Parameters
@@ -182,13 +205,20 @@ class Yardstick:
             Default :func:`textbook_shapers`.
         top : float
             The widest width.
+        runs : dict, optional
+            The textbook shapers' runs already made (name -> CoSimResult): for
+            instance with their exact delays (:func:`harness.peers.shapers.shape`),
+            which the generator's whole-sample shaper rounds.  Then ``shapers``
+            is not used.
         """
         sweeps = width_sweeps(sc.uncertainty, top)
         n = max(2, int(round(40 * top)))
         widths = np.linspace(0.0, top, n + 1)
         ys = cls(sc.uncertainty, sweeps, widths, {})
-        for name, spec in (textbook_shapers(sc) if shapers is None else shapers).items():
-            run = session.run(sc, "JL", tuple(T_F), shaper=spec)
+        if runs is None:
+            runs = {name: session.run(sc, "JL", tuple(T_F), shaper=spec) for name, spec in
+                    (textbook_shapers(sc) if shapers is None else shapers).items()}
+        for name, run in runs.items():
             per = ys.score(run, sc, band)
             ys.settling[name] = per
             ys.curves[name] = {sw.kind: sw.worst_upto(per[sw.kind], widths) for sw in sweeps}
@@ -261,9 +291,11 @@ class UnmodelledModes:
     ``ratio[1]`` times the highest modelled mode (following it along z), with a
     damping ratio of ``zeta`` or more and a participation up to ``gain`` of
     that mode's.  A design keeps each such mode's residual after the motion no
-    larger than JL's own, or than ``floor`` of the band, whichever is larger
-    (on the nominal map and at the edges of the stated map scale): the shaped
-    reference excites no such mode more than the profile it shapes.
+    larger than the least that JL or any textbook shaper on it leaves it
+    (:meth:`bound`), or than ``floor`` of the band, whichever is larger (on the
+    nominal map and at the edges of the stated map scale): the recommended
+    reference excites no such mode more than the quietest of the profiles a
+    user would otherwise pick.
 
     Attributes
     ----------
@@ -325,13 +357,27 @@ class UnmodelledModes:
         """
         scq, pts = self.scenario(sc), self.points(sc.uncertainty)
         jl = ShapedObjective(scq, session, "JL", tuple(T_jl), pts, band)
-        amp, _, _ = jl.residuals(np.ones((1, 1)), (0,))
         obj = jl if profile == "JL" and T_F is None else ShapedObjective(
             scq, session, profile, tuple(T_jl if T_F is None else T_F), pts, band)
-        return Quiet(obj, np.maximum(amp[..., 0].ravel(), self.floor * band))
+        return Quiet(obj, self.bound(sc, jl, band))
+
+    def bound(self, sc: Scenario, jl: ShapedObjective, band: float) -> np.ndarray:
+        """Return each (point, assumed mode) row's bound: the quietest of JL and the textbooks.
+
+        ``jl`` is a :class:`~harness.tuning.shaping.ShapedObjective` of JL on
+        :meth:`scenario` at :meth:`points`: the residual each row is left by JL
+        and by each textbook shaper on it (:func:`textbook_shapers`), the least
+        of them, and no less than ``floor`` of the band.
+        """
+        amps = [jl.residuals(np.ones((1, 1)), (0,))[0][..., 0].ravel()]
+        for spec in textbook_shapers(sc).values():
+            amps.append(jl.residuals(np.array(spec.amplitudes)[:, None],
+                                     spec.delays)[0][..., 0].ravel())
+        return np.maximum(np.min(np.vstack(amps), axis=0), self.floor * band)
 
     def describe(self) -> str:
         """Return the assumption in words."""
         return (f"any mode at {self.ratio[0]:g}-{self.ratio[1]:g}x the highest modelled one "
                 f"(following z, zeta >= {self.zeta:g}, gain up to {self.gain:g} of it) is left a "
-                f"residual no larger than JL's, or than {100 * self.floor:g} % of the band")
+                f"residual no larger than the least JL or a textbook shaper leaves it, or than "
+                f"{100 * self.floor:g} % of the band")

@@ -46,16 +46,26 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..compiled import engine as _compiled_engine
-from ..lp import IncrementalLP
+from ..lp import DualIncrementalLP, IncrementalLP
 from ..plant import hermite_mid, transitions
 from ..scenario import Scenario
 from ..simulation.session import Session
 from ..uncertainty import Perturbation
 
-__all__ = ["RampObjective", "ReferenceDesign", "design_reference", "kinematics"]
+__all__ = ["TABLE_PIECES", "RampObjective", "ReferenceDesign", "design_reference", "kinematics",
+           "pieces", "quiet_bound", "sparse_support"]
 
 _POLYGON = 16
 """Sides of the polygon inside which a residual's phasor is kept (an inner approximation)."""
+
+TABLE_PIECES = 256
+"""Most pieces of constant jerk a design may have: what the generator FMU's table holds."""
+
+
+def pieces(jerk: np.ndarray) -> int:
+    """Return the pieces of constant jerk of a per-sample jerk (runs of equal samples)."""
+    j = np.asarray(jerk, dtype=float)
+    return int(np.count_nonzero(np.diff(j) != 0.0)) + 1 if j.size else 0
 
 
 def kinematics(jerk: np.ndarray, Te: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -72,15 +82,19 @@ class _Span:
     """What the programmes need for one span D (every ramp delayed by 0..D samples)."""
 
     D: int
+    delays: np.ndarray  # the delays computed (0..D): the arrays' last axis
     k_end: int      # the motion's end (absolute sample)
     k_hi: int       # the window's last sample (the plant free from there on)
     k_w: int        # the window's first sample
     T: float        # the motion time (s)
-    C: np.ndarray   # (R, 2, G, D+1): each row's state at k_hi
+    C: np.ndarray   # (R, 2, G, nd): each row's state at k_hi, each delay of ``delays``
+    C_end: np.ndarray  # (R, 2, G, nd): each row's state at the motion's end (k_end)
     sig: np.ndarray  # (R,) decay rate at rest
     wd: np.ndarray  # (R,) damped angular frequency at rest
-    E: np.ndarray   # (P, G, D+1, W+1): the load error at samples k_w..k_hi
-    v: np.ndarray   # (k_end+1, G, D+1): velocity, acceleration, jerk, position of each
+    sig_end: np.ndarray  # (R,) the same at the motion's end (Z may still move)
+    wd_end: np.ndarray
+    E: np.ndarray   # (P, G, nd, W+1): the load error at samples k_w..k_hi
+    v: np.ndarray   # (k_end+1, G, nd): velocity, acceleration, jerk, position of each
     a: np.ndarray   #   ramp delayed by d, at the samples 0..k_end
     j: np.ndarray
     x: np.ndarray
@@ -104,16 +118,21 @@ class RampObjective:
     piece : float
         Each run of constant jerk is cut into pieces of at most this many jerk
         times, each with its own filter (1: JL's four ramps; less: more freedom).
+    window : bool
+        Compute the load error near the end and after the motion (False: only
+        the states when the motion ends, ``C_end``, e.g. for modes kept quiet).
     """
 
     def __init__(self, sc: Scenario, session: Session, T_F: tuple[float, ...],
-                 points: tuple[Perturbation, ...], band: float, piece: float = 1.0) -> None:
+                 points: tuple[Perturbation, ...], band: float, piece: float = 1.0,
+                 window: bool = True) -> None:
         if not band > 0:
             raise ValueError(f"band must be > 0 m, got {band!r}")
         self.sc, self.s, self.points, self.band = sc, session.fast(), tuple(points), band
         self.Te = self.h = sc.simulation.Te
         if abs(sc.simulation.step - self.Te) > 1e-12 * self.Te:
             raise ValueError("the reference design needs the communication step equal to Te")
+        self.window = bool(window)
         self.T_F = tuple(float(t) for t in T_F)
         params = self.s.move_params(sc, "JL", self.T_F)
         self.T_base = self.s.axis.plan(params)
@@ -148,7 +167,7 @@ class RampObjective:
         """Modes per point."""
         return len(self.modes)
 
-    def span(self, D: int, after: float = 0.0) -> _Span:
+    def span(self, D: int, after: float = 0.0, stride: int = 1) -> _Span:
         """Return the span D's states, window and kinematics (cached).
 
         Parameters
@@ -158,13 +177,18 @@ class RampObjective:
         after : float
             Seconds the window runs past the instant the plant is free (the
             motion ended, Z at rest) and its tail.
+        stride : int
+            Only the delays 0, stride, 2·stride, … and D are computed
+            (:attr:`_Span.delays`); the arrays' last axis runs over them.
         """
-        key = (int(D), int(round(after / self.h)))
+        key = (int(D), int(round(after / self.h)), int(stride))
         got = self._spans.get(key)
         if got is not None:
             return got
         sc, s, h, D = self.sc, self.s, self.h, int(D)
-        T = self.T_base + D * self.Te
+        dly = np.unique(np.r_[np.arange(0, D + 1, max(1, int(stride))), D]).astype(int)
+        nd = dly.size
+        T = (self.n_base + D) * self.Te  # the table's length, as the replay computes it
         v_z, _ = s.z_velocity(sc, T)
         T_z = s.z_axis.plan(s.z_move_params(sc, v_z))
         k_end = self.k0 + self.n_base + D
@@ -185,6 +209,10 @@ class RampObjective:
         za = np.array(zeta)
         w = 2.0 * np.pi * np.array(f_rest)
         sig, wd = za * w, w * np.sqrt(1.0 - za * za)
+        z_e = np.array([z[k_end]])
+        w_e = 2.0 * np.pi * np.array([float(p.frequencies(m.f_array, z_e, self.pivot)[0])
+                                      for p in self.points for m in self.modes])
+        sig_end, wd_end = za * w_e, w_e * np.sqrt(1.0 - za * za)
         with np.errstate(divide="ignore"):
             tau = np.where(sig > 0, -np.log(np.cos(0.5 * wd * h)) / np.where(sig > 0, sig, 1.0),
                            0.0)
@@ -219,11 +247,23 @@ class RampObjective:
         L = 1 << int(math.ceil(math.log2(k_end + D + 1)))
         Pa = np.fft.rfft(psi[:, :, :, 0].transpose(0, 2, 1), L)
         Pj = np.fft.rfft(psi[:, :, :, 1].transpose(0, 2, 1), L)
-        C_end = np.empty((R, 2, G, D + 1))
+        C_end = np.empty((R, 2, G, nd))
         for g in range(G):
             corr = np.fft.irfft(Pa * np.conj(np.fft.rfft(U[g, 0], L))
                                 + Pj * np.conj(np.fft.rfft(U[g, 1], L)), L)
-            C_end[:, :, g, :] = corr[:, :, :D + 1]
+            C_end[:, :, g, :] = corr[:, :, dly]
+        kidx = np.arange(k_end + 1)[:, None] - dly[None, :] + D
+
+        def delayed(M: np.ndarray) -> np.ndarray:
+            return np.stack([np.concatenate([np.zeros(D), M[g]])[kidx] for g in range(G)],
+                            axis=1)
+
+        if not self.window:  # the states when the motion ends, nothing else
+            sp = _Span(D, dly, k_end, k_end, k_end, T, C_end, C_end, sig, wd, sig_end, wd_end,
+                       np.zeros((P, G, nd, 0)), delayed(V), delayed(A), delayed(J),
+                       delayed(X))
+            self._spans[key] = sp
+            return sp
         # the window before the end: the final states taken back through the inputs after k
         lead = max(1, int(math.ceil(self.period / h)))
         k_w = max(self.k0, k_end - D - lead)
@@ -237,39 +277,33 @@ class RampObjective:
         back[W] = np.eye(2)
         for i in range(W - 1, -1, -1):
             back[i] = np.matmul(inv[:, i], back[i + 1])
-        idx = np.arange(k_w, k_end + 1)[None, :] - np.arange(D + 1)[:, None] + D  # (D+1, W+1)
+        idx = np.arange(k_w, k_end + 1)[None, :] - dly[:, None] + D  # (nd, W+1)
         ps = psi[:, k_w:k_end].transpose(1, 0, 2, 3).reshape(W, 2 * R, 2)
         n_after = k_hi - k_end
-        E = np.empty((P, G, D + 1, W + 1 + n_after))
+        E = np.empty((P, G, nd, W + 1 + n_after))
         off = self.sc.move.x0 - self.sc.move.target
         # after the end: free, time-varying while Z moves (the reference at rest at target)
         phi_a = transitions(2.0 * np.pi * F[:, k_end:k_hi], za[:, None], h)  # (R, n_after,...)
         C = np.empty_like(C_end)
         for g in range(G):
             ug = np.concatenate([np.zeros((2, D)), U[g]], axis=1)
-            Ud = np.stack([ug[0][idx[:, :-1]], ug[1][idx[:, :-1]]], axis=1)  # (D+1, 2, W)
-            contrib = np.matmul(ps, Ud.transpose(2, 1, 0)).reshape(W, R, 2, D + 1)
-            part = np.zeros((W + 1, R, 2, D + 1))
+            Ud = np.stack([ug[0][idx[:, :-1]], ug[1][idx[:, :-1]]], axis=1)  # (nd, 2, W)
+            contrib = np.matmul(ps, Ud.transpose(2, 1, 0)).reshape(W, R, 2, nd)
+            part = np.zeros((W + 1, R, 2, nd))
             part[:W] = np.cumsum(contrib[::-1], axis=0)[::-1]
-            eps = np.matmul(back, C_end[None, :, :, g, :] - part)[:, :, 0, :]  # (W+1, R, D+1)
-            xg = np.concatenate([np.zeros(D), X[g]])[idx]  # (D+1, W+1)
+            eps = np.matmul(back, C_end[None, :, :, g, :] - part)[:, :, 0, :]  # (W+1, R, nd)
+            xg = np.concatenate([np.zeros(D), X[g]])[idx]  # (nd, W+1)
             if g == 0:
                 xg = xg + off
-            E[:, g, :, :W + 1] = (eps.reshape(W + 1, P, nm, D + 1).sum(axis=2).transpose(1, 2, 0)
+            E[:, g, :, :W + 1] = (eps.reshape(W + 1, P, nm, nd).sum(axis=2).transpose(1, 2, 0)
                                   + xg[None])
-            st = C_end[:, :, g, :]  # (R, 2, D+1)
+            st = C_end[:, :, g, :]  # (R, 2, nd)
             for i in range(n_after):
                 st = np.matmul(phi_a[:, i], st)
-                E[:, g, :, W + 1 + i] = st[:, 0, :].reshape(P, nm, D + 1).sum(axis=1)
+                E[:, g, :, W + 1 + i] = st[:, 0, :].reshape(P, nm, nd).sum(axis=1)
             C[:, :, g, :] = st
-        kidx = np.arange(k_end + 1)[:, None] - np.arange(D + 1)[None, :] + D
-
-        def delayed(M: np.ndarray) -> np.ndarray:
-            return np.stack([np.concatenate([np.zeros(D), M[g]])[kidx] for g in range(G)],
-                            axis=1)
-
-        sp = _Span(D, k_end, k_hi, k_w, T, C, sig, wd, E, delayed(V), delayed(A), delayed(J),
-                   delayed(X))
+        sp = _Span(D, dly, k_end, k_hi, k_w, T, C, C_end, sig, wd, sig_end, wd_end, E,
+                   delayed(V), delayed(A), delayed(J), delayed(X))
         if len(self._spans) >= 6:
             self._spans.pop(next(iter(self._spans)))
         self._spans[key] = sp
@@ -315,30 +349,40 @@ class ReferenceDesign:
 
 
 def _land(jerk: np.ndarray, Te: float, distance: float, j_max: float) -> np.ndarray:
-    """Return the jerk corrected (least norm, off the samples at the limit) to land exactly."""
+    """Return the jerk corrected to land exactly, its pieces of constant jerk kept.
+
+    The programme meets the end conditions to its tolerance; the three residuals
+    (a_N, v_N, x_N − distance) are removed by the least change of the pieces'
+    jerks (each piece one value, the pieces at the jerk limit left alone), so
+    that the table keeps its pieces.
+    """
     N = jerk.size
     k = np.arange(N)
     M = np.vstack((np.full(N, Te), Te**2 * (N - k - 0.5),
                    Te**3 * ((N - k - 1) ** 2 / 2.0 + (N - k - 1) / 2.0 + 1.0 / 6.0)))
     x, v, a = kinematics(jerk, Te)
     r = np.array([a[-1], v[-1], x[-1] - distance])
-    free = (np.abs(jerk) < j_max * (1.0 - 1e-6)) & (jerk != 0.0)
+    starts = np.flatnonzero(np.r_[True, np.diff(jerk) != 0.0])
+    run_of = np.cumsum(np.r_[True, np.diff(jerk) != 0.0]) - 1  # each sample's piece
+    Mr = np.zeros((3, starts.size))
+    np.add.at(Mr.T, run_of, M.T)  # the effect of a piece's jerk
+    free = (np.abs(jerk[starts]) < j_max * (1.0 - 1e-6)) & (jerk[starts] != 0.0)
     if free.sum() < 3:
-        free = np.abs(jerk) < j_max * (1.0 - 1e-6)
+        free = np.abs(jerk[starts]) < j_max * (1.0 - 1e-6)
     if free.sum() < 3:
         return jerk
-    Mf = M[:, free]
-    out = jerk.copy()
-    out[free] -= Mf.T @ np.linalg.solve(Mf @ Mf.T, r)
-    return out
-
+    Mf = Mr[:, free]
+    delta = np.zeros(starts.size)
+    delta[free] = -Mf.T @ np.linalg.solve(Mf @ Mf.T, r)
+    return jerk + delta[run_of]
 
 def design_reference(obj: RampObjective, D: int, *, target: float = 0.95,
                      residual: float = 0.95, minimax: np.ndarray | None = None,
                      deadlines: np.ndarray | None = None,
                      quiet: tuple[RampObjective, np.ndarray] | None = None,
-                     after: float = 0.0, step: int = 4, support: np.ndarray | None = None
-                     ) -> ReferenceDesign | None:
+                     after: float = 0.0, step: int = 4, stride: int = 1,
+                     support: np.ndarray | list[np.ndarray] | None = None,
+                     dual: bool = True, per_round: int = 48) -> ReferenceDesign | None:
     """Design the reference of span D that settles first at the ``minimax`` points.
 
     Parameters
@@ -358,14 +402,23 @@ def design_reference(obj: RampObjective, D: int, *, target: float = 0.95,
         must stay in the band (``inf``: none).
     quiet : (RampObjective, ndarray), optional
         Modes to keep quiet: an objective of the same move whose points and
-        modes are them, and the most each (point, mode) row's residual may be (m).
+        modes are them, and the most each (point, mode) row's residual may be
+        when the motion ends (m; :func:`quiet_bound`).
     after : float
         Seconds the window runs past the plant's becoming free (a design may
         settle that late).
     step : int
         Samples m goes down by at first.
-    support : ndarray of int, optional
-        The delays (0..D) each ramp's filter may use; default every one.
+    stride : int
+        The delays computed: 0, stride, 2·stride, … and D (:meth:`RampObjective.span`).
+    support : ndarray of int, or list of them, optional
+        The delays (among those) each piece's filter may use (one array for
+        every piece, or one per piece); default every one computed.
+    per_round : int
+        Most rows of one kind added per round (the rows a solution breaks).
+    dual : bool
+        Solve the programmes through their duals (:class:`harness.lp.DualIncrementalLP`:
+        few variables, many rows); False: as they are.
 
     Returns
     -------
@@ -373,23 +426,37 @@ def design_reference(obj: RampObjective, D: int, *, target: float = 0.95,
         None if no design of this span settles within the window at every point.
     """
     t0 = time.perf_counter()
-    sp = obj.span(D, after)
+    sp = obj.span(D, after, stride)
     G, P, nm = obj.G, len(obj.points), obj.nm
-    sup = np.arange(D + 1) if support is None else np.unique(np.r_[0, np.asarray(support, int)])
-    if sup[0] < 0 or sup[-1] > D:
-        raise ValueError(f"support must hold delays in 0..{D}, got {support!r}")
+    pos = {int(d): i for i, d in enumerate(sp.delays)}
+    if support is None:
+        sups = [sp.delays] * G
+    elif not isinstance(support, list):
+        sups = [np.unique(np.r_[0, np.asarray(support, int)])] * G
+    else:
+        if len(support) != G:
+            raise ValueError(f"support must be one array of delays, or one per piece ({G}), "
+                             f"got {len(support)}")
+        sups = [np.unique(np.r_[0, np.asarray(x, int)]) for x in support]
+    for x in sups:
+        if any(int(d) not in pos for d in x):
+            raise ValueError(f"support must hold delays among {sp.delays.tolist()} (0..{D} "
+                             f"every {stride}), got {support!r}")
+    idx = [np.array([pos[int(d)] for d in x]) for x in sups]  # their places in the span
     # the variables are each filter's tail sums S_i = Σ_{d ≥ s_i} A[d] at the support's
     # delays s_1 < … < s_K (S_0 = 1: each filter sums to 1, JL's acceleration levels): a
     # quantity Q of the design is Q(s_0) + Σ_i S_i (Q(s_i) − Q(s_{i−1})).  The columns are
     # then the effect of delaying a ramp a little more (bounded), not of a whole ramp (whose
     # position grows without bound: the programme would be ill-conditioned)
-    ns = sup.size - 1
-    n = G * ns
+    ns = [x.size - 1 for x in sups]
+    n = int(sum(ns))
+    col0 = np.r_[0, np.cumsum(ns)].astype(int)  # each piece's first column
 
     def on(M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(..., G, D+1) -> the constant (...,) and the columns (..., n)."""
-        Q = M[..., sup]
-        return Q[..., 0].sum(axis=-1), np.diff(Q, axis=-1).reshape(*M.shape[:-2], n)
+        c = sum(M[..., g, 0] for g in range(G))
+        cols = [np.diff(M[..., g, idx[g]], axis=-1) for g in range(G)]
+        return c, np.concatenate(cols, axis=-1)
 
     mm = np.ones(P, bool) if minimax is None else np.asarray(minimax, bool)
     dl = np.full(P, math.inf) if deadlines is None else np.asarray(deadlines, float)
@@ -398,18 +465,20 @@ def design_reference(obj: RampObjective, D: int, *, target: float = 0.95,
     # S_1 in [0, 2] and |S_i − S_{i+1}| <= 1 (each amplitude within [−1, 1]), S_K within [−1, 1]
     lo_s = np.full(n, -float(D + 1))
     hi_s = np.full(n, float(D + 1))
-    lp = IncrementalLP(np.r_[lo_s, 0.0], np.r_[hi_s, np.inf], np.r_[np.zeros(n), 1.0])
-    if ns:
-        amp_rows = np.zeros((G * (ns + 1), n))
-        amp_lo = np.zeros(G * (ns + 1))
+    lp = (DualIncrementalLP if dual else IncrementalLP)(np.r_[lo_s, 0.0], np.r_[hi_s, np.inf],
+                                                        np.r_[np.zeros(n), 1.0])
+    if n:
+        amp_rows = np.zeros((n + G, n))
+        amp_lo = np.zeros(n + G)
+        r = 0
         for g in range(G):
-            for i in range(ns + 1):  # A_i = S_i − S_{i+1} (S_0 = 1, S_{ns+1} = 0)
-                r = g * (ns + 1) + i
+            for i in range(ns[g] + 1):  # A_i = S_i − S_{i+1} (S_0 = 1, S_{ns+1} = 0)
                 if i >= 1:
-                    amp_rows[r, g * ns + i - 1] = 1.0
-                if i < ns:
-                    amp_rows[r, g * ns + i] = -1.0
+                    amp_rows[r, col0[g] + i - 1] = 1.0
+                if i < ns[g]:
+                    amp_rows[r, col0[g] + i] = -1.0
                 amp_lo[r] = 1.0 if i == 0 else 0.0
+                r += 1
         lp.add(np.hstack([amp_rows, np.zeros((amp_rows.shape[0], 1))]), -1.0 - amp_lo,
                1.0 - amp_lo)
     k_end, W0 = sp.k_end, sp.k_w
@@ -453,8 +522,8 @@ def design_reference(obj: RampObjective, D: int, *, target: float = 0.95,
     family(np.r_[c_d, -c_d], np.vstack([M_d, -M_d]), 1.0, -np.inf, 0.0)
     if quiet is not None:
         qobj, bound = quiet
-        qs = qobj.span(D, after)
-        qc, qm = polygon(*on(qs.C), qs.sig, qs.wd)
+        qs = qobj.span(D, after, stride)  # their residual when the motion ends
+        qc, qm = polygon(*on(qs.C_end), qs.sig_end, qs.wd_end)
         k_q = 1.0 / (bound[:, None] * cos_p)
         family(qc * k_q, qm * k_q[:, :, None], 0.0, -np.inf, 1.0)
     sig_p = sp.sig.reshape(P, nm).min(axis=1)
@@ -506,7 +575,7 @@ def design_reference(obj: RampObjective, D: int, *, target: float = 0.95,
                 fresh = [j for j, k in enumerate(keys) if k not in kept]
                 if fresh:
                     sel = bad[fresh]
-                    order = np.argsort(-over[sel])[:48]
+                    order = np.argsort(-over[sel])[:per_round]
                     worst = sel[order]
                     kept.update(keys[fresh[j]] for j in order)
                     lp.add(np.hstack([M[worst], np.full((worst.size, 1), -tau)]), lo[worst],
@@ -519,33 +588,47 @@ def design_reference(obj: RampObjective, D: int, *, target: float = 0.95,
         return None
     notes: list[str] = []
     best = (sp.k_hi + 1, lp.x[:n].copy(), float(lp.x[n]))
-    # the earliest feasible m: galloping down from the window's end, then bisection; the
-    # rows of a failed m are dropped, those of a feasible one kept
-    good, below, stride = sp.k_hi + 1, None, max(1, int(step))
-    while True:
-        if below is None:
-            if good - 1 <= sp.k_w:
-                break
-            m = max(good - stride, sp.k_w + 1)
-        else:
-            if good - below <= 1:
-                break
-            m = (good + below) // 2
-        first, snap = lp.rows, set(kept)
+    # the earliest feasible m: its error ratio t(m) grows as m goes down; the next m is where
+    # the secant of ln t through the two nearest probes crosses ln target (a bisection when
+    # it stalls), starting from JL's own end; the rows of an infeasible m are dropped (its
+    # basis too), those of a feasible one kept
+    ts: dict[int, float] = {sp.k_hi + 1: max(float(lp.x[n]), 1e-12)}
+    good, below = sp.k_hi + 1, sp.k_w
+    guess = min(max(obj.k0 + obj.n_base, sp.k_w + 1), good - 1)
+    lt = math.log(target)
+    while good - below > 1:
+        m = guess if guess is not None else (good + below) // 2
+        guess = None
+        first, snap = lp.mark(), set(kept)
         if solve(m) and lp.x[n] <= target:
             good, best = m, (m, lp.x[:n].copy(), float(lp.x[n]))  # type: ignore[assignment]
-            stride *= 2
+            ts[m] = max(float(lp.x[n]), 1e-12)
         else:
-            lp.drop_from(first)
+            ts[m] = float(lp.x[n]) if lp.solves and lp.x[n] > target else math.inf
+            lp.restore(first)
             kept.clear()
             kept.update(snap)
             below = m
+        # the secant of ln t through the probes nearest the crossing
+        near = sorted((k for k in ts if math.isfinite(ts[k])), key=lambda k: abs(
+            math.log(ts[k]) - lt))[:2]
+        if len(near) == 2 and near[0] != near[1]:
+            (m1, m2) = near
+            l1, l2 = math.log(ts[m1]), math.log(ts[m2])
+            if l1 != l2:
+                est = m1 + (lt - l1) * (m2 - m1) / (l2 - l1)
+                if below < est < good:
+                    cand = int(math.floor(est)) if below < math.floor(est) else below + 1
+                    guess = min(max(cand, below + 1), good - 1)
+                    if guess in ts:
+                        guess = None
     if best is None:
         return None
     m, S, t = best
-    tails = np.hstack([np.ones((G, 1)), S.reshape(G, ns), np.zeros((G, 1))])
     amps = np.zeros((G, D + 1))
-    amps[:, sup] = tails[:, :-1] - tails[:, 1:]
+    for g in range(G):
+        tails = np.r_[1.0, S[col0[g]:col0[g + 1]], 0.0]
+        amps[g, sups[g]] = tails[:-1] - tails[1:]
     jerk = np.zeros(obj.n_base + D)
     for g in range(G):
         for d in np.flatnonzero(np.abs(amps[g]) > 1e-12):
@@ -553,3 +636,33 @@ def design_reference(obj: RampObjective, D: int, *, target: float = 0.95,
     jerk = sgn * _land(sgn * jerk, obj.Te, abs(mv.distance), obj.j_max)
     return ReferenceDesign(jerk, amps, D, m, t, jerk.size * obj.Te, lp.solves, lp.iterations,
                            time.perf_counter() - t0, notes)
+
+
+def quiet_bound(qobj: RampObjective, floor: float) -> np.ndarray:
+    """Return each row's bound for modes kept quiet: JL's own residual, or ``floor`` bands.
+
+    ``qobj`` is a :class:`RampObjective` whose modes are the ones to keep quiet
+    (:meth:`harness.tuning.graceful.UnmodelledModes.scenario`); JL is every
+    ramp undelayed (span 0).
+    """
+    sp = qobj.span(0)
+    C = sp.C_end[:, :, :, 0].sum(axis=2)  # (R, 2): JL's state when it ends
+    amp = np.hypot(C[:, 0], (C[:, 1] + sp.sig_end * C[:, 0]) / sp.wd_end)
+    return np.maximum(amp, floor * qobj.band)
+
+
+def sparse_support(design: ReferenceDesign, budget: int) -> list[np.ndarray]:
+    """Return each piece's largest amplitudes' delays, ``budget`` of them in all.
+
+    A design whose table has too many pieces (each amplitude starts and ends
+    one) is designed again on these delays alone.
+    """
+    A = np.abs(design.amplitudes)
+    G = A.shape[0]
+    order = np.argsort(-A, axis=None)
+    keep: list[set[int]] = [{0} for _ in range(G)]
+    for f in order[:max(budget, G)]:
+        g, d = divmod(int(f), A.shape[1])
+        if A[g, d] > 1e-12:
+            keep[g].add(d)
+    return [np.array(sorted(k)) for k in keep]
