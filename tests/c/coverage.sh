@@ -34,7 +34,7 @@ for src in fmu_src/*.c; do
     gcc $CFLAGS -c "$src" -o "$COV/obj/$name.o"
 done
 CORE="$COV/obj/djl_validate.o $COV/obj/djl_segment.o $COV/obj/djl_motion.o $COV/obj/djl_replan.o
-      $COV/obj/djl_eval.o $COV/obj/djl_shaper.o"
+      $COV/obj/djl_eval.o $COV/obj/djl_shaper.o $COV/obj/djl_table.o"
 FMU="$COV/obj/fmu_base.o $COV/obj/fmu_model.o $COV/obj/fmu_instance.o"
 link() { # name, sources (driver), objects
     out=$1
