@@ -1728,6 +1728,24 @@ static void run_table(void)
         fmi2FreeInstance(c);
     }
 
+    /* the planner of the other profiles refuses a table (it needs its table) */
+    {
+        static djl_plan pl;
+        djl_params q;
+        djl_error err;
+        djl_params_default(&q);
+        q.profile = DJL_PROFILE_TABLE;
+        q.distance = 0.0;
+        CHECK(djl_plan_motion(&q, &pl, &err) == DJL_E_PARAM && strcmp(err.param, "profile") == 0 &&
+                  strstr(err.message, "planned from its table") != NULL,
+              "djl_plan_motion of a table: %s", err.message);
+        CHECK(djl_table_validate(&q, &(djl_table){0}, &err) == DJL_OK, "an empty table at rest: %s",
+              err.message);
+        q.profile = DJL_PROFILE_DJL;
+        CHECK(djl_table_validate(&q, &(djl_table){0}, &err) == DJL_E_PARAM &&
+                  strstr(err.message, "profile = 4") != NULL,
+              "a table needs profile 4: %s", err.message);
+    }
     /* bad tables: refused at initialisation naming the entry; usable after a reset */
     {
         static const struct {
