@@ -484,7 +484,7 @@ def _run_commanded(fmu, p, at, command, n_after=2500):
     return t, y, log
 
 
-@pytest.mark.parametrize("frac", [0.05, 0.3, 0.55, 0.8, 0.97, 1.2])
+@pytest.mark.parametrize("frac", [0.05, 0.3, 0.55, 0.8, 0.9, 0.97, 1.2])
 def test_a_stop_during_a_table_rests_within_the_limits_and_the_table(fmu, frac):
     """A stop at any time (a monotone table: the axis never backs up): at rest, within v_max
     and a_max/d_max, between the position at the stop and the table's target."""
@@ -499,9 +499,32 @@ def test_a_stop_during_a_table_rests_within_the_limits_and_the_table(fmu, frac):
     assert y["v"].min() >= -1e-12 * p["v_max"]  # never backs up
     x_stop = y["x"][at]
     assert x_stop - 1e-15 <= y["x"][-1] <= p["distance"] + 1e-12 * p["distance"]
+    kept = any("the move is kept" in r.message for r in log)
     if frac > 1.0:  # after the end: it stays where it is
-        assert y["x"][-1] == p["distance"]
+        assert y["x"][-1] == p["distance"] and not kept
+    if frac == 0.9:
+        # in the table's own last deceleration, sharper than a stop's stages (T_F3, T_F4): a
+        # stop would rest past the target, so the table is kept and lands on it (the table
+        # rests at its target before its end: without the table's rule in djl_replan.c's
+        # stop_passes, that rest made the target no bound and such stops passed it)
+        assert kept and y["x"][-1] == p["distance"]
     assert not [r for r in log if r.status >= 3]
+
+
+def test_a_stop_on_a_table_that_turns_back_is_made(fmu2):
+    """A table whose velocity dips below 0 inside a piece (it backs up, then goes on): its
+    target bounds nothing, the stop is made, at rest within the limits."""
+    samples = [18, 38, 40, 20, 18, 18]
+    jerk = [100.0, -100.0, 100.0, -100.0, -100.0, 100.0]
+    p, ex = params_of(samples, jerk)
+    v3 = ex.v[2]  # piece 3: a from -2 to 2 m/s2, v from 0.0124 m/s down to -0.0076 and back
+    assert v3 > 0 and ex.v[3] > 0 and float(v3 - Fr(2) ** 2 / 200) < -0.007
+    p.update(v_max=0.04, a_max=2.1, d_max=2.1)
+    t, y, log = _run_commanded(fmu2, p, 30, {"stop": True})
+    assert y["done"][-1] and y["v"][-1] == 0.0
+    assert np.abs(y["v"]).max() <= 0.04 and np.abs(y["a"]).max() <= 2.1
+    assert not any("the move is kept" in r.message for r in log)
+    assert any("stop: replanned" in r.message for r in log)
 
 
 @pytest.mark.parametrize("frac, target", [(0.1, 0.05), (0.4, -0.2), (0.5, 2.0), (0.9, 0.3),
