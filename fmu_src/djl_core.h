@@ -36,9 +36,16 @@ extern "C" {
 #define DJL_MAX_SEGMENTS 32
 #define DJL_MAX_STEPS (4 * DJL_MAX_SEGMENTS)
 #define DJL_MAX_PIECES (2 * DJL_MAX_STEPS + DJL_MAX_SEGMENTS + 2)
-/* Steps a plan records (a replanned move: the ramps still running, the steps
- * that end a stage or stop, and those of the new move). */
-#define DJL_MAX_PLAN_STEPS (DJL_MAX_STEPS + 8)
+/* Pieces of a replayed table (profile 4, djl_plan_table): its plan holds one piece per
+ * entry and the rest at its end, DJL_MAX_TABLE + 1 <= DJL_MAX_PIECES. */
+#define DJL_MAX_TABLE 256
+/* Steps a plan records: a planned motion's (DJL_MAX_STEPS), a table's (one ramp per
+ * entry, DJL_MAX_TABLE), or a replanned move's (the ramps still running, the steps that
+ * end a stage or stop, and those of the new move), and a margin of 8. */
+#define DJL_MAX_PLAN_STEPS ((DJL_MAX_TABLE > DJL_MAX_STEPS ? DJL_MAX_TABLE : DJL_MAX_STEPS) + 8)
+/* A table's plan fits (compile-time check). */
+typedef char djl_table_fits[(DJL_MAX_TABLE + 1 <= DJL_MAX_PIECES &&
+                             DJL_MAX_TABLE <= DJL_MAX_PLAN_STEPS) ? 1 : -1];
 /* Longest filter accepted, in samples. */
 #define DJL_MAX_FILTER_SAMPLES 100000000
 /* Longest motion accepted, in samples (keeps every sample index exact in a double). */
@@ -56,7 +63,12 @@ extern "C" {
  * is accepted: next to v_max it is 0.) */
 #define DJL_MIN_MAGNITUDE 2.2250738585072014e-308
 
-typedef enum { DJL_PROFILE_AL = 1, DJL_PROFILE_JL = 2, DJL_PROFILE_DJL = 3 } djl_profile;
+typedef enum {
+    DJL_PROFILE_AL = 1,
+    DJL_PROFILE_JL = 2,
+    DJL_PROFILE_DJL = 3,
+    DJL_PROFILE_TABLE = 4 /* piecewise-constant jerk replayed from a djl_table (djl_plan_table) */
+} djl_profile;
 
 /* What to do when an acceleration or deceleration stage of the AL profile is
  * shorter than the jerk times that shape it. */
@@ -194,6 +206,48 @@ double djl_applied_jerk_time(const djl_plan *plan, int stage);
 double djl_motion_time(const djl_plan *plan);
 
 const char *djl_status_name(djl_status s);
+
+/* ------------------------------------------------------------------------ */
+/* a replayed table (djl_table.c; docs/generator.md, "Replayed tables")       */
+
+/* The end state of a table is accepted within this of the table's own scale (its largest
+ * acceleration, velocity, travel), and then set exactly to rest at the target. */
+#define DJL_TABLE_END_TOLERANCE 1e-9
+/* The table's velocity and acceleration may exceed the limits by this much of each limit
+ * (rounding); the outputs, evaluated anywhere, then stay within 1e-9 of them. */
+#define DJL_TABLE_LIMIT_TOLERANCE 1e-10
+
+/* Profile 4: the jerk table_jerk[i] held for table_samples[i] samples of Te, i < n, from
+ * the motion's start at x0 (with v0, acceleration 0).  The FMU's parameters table_n,
+ * table_samples, table_jerk. */
+typedef struct {
+    int32_t n;                      /* pieces, 0..DJL_MAX_TABLE */
+    int32_t samples[DJL_MAX_TABLE]; /* samples of Te of each piece, 1..DJL_MAX_FILTER_SAMPLES */
+    double jerk[DJL_MAX_TABLE];     /* m/s^3 over each piece */
+} djl_table;
+
+/* Start values: n = 0, samples 1, jerk 0. */
+void djl_table_default(djl_table *t);
+
+/* Check p (djl_validate: profile 4 needs n_segments = 0 and v_e = 0) and the table t: n in
+ * range, each piece's samples and jerk (finite, |jerk| <= (a_max + d_max) / Te), the
+ * motion within v_max and [-d_max, a_max] (mirrored for distance < 0) up to
+ * DJL_TABLE_LIMIT_TOLERANCE, ending at rest at x0 + distance within DJL_TABLE_END_TOLERANCE.
+ * DJL_E_PARAM naming the parameter (e.g. "table_jerk[3]", 1-based) and its value. */
+djl_status djl_table_validate(const djl_params *p, const djl_table *t, djl_error *err);
+
+/* Validate and plan p->profile = DJL_PROFILE_TABLE from t: one piece per entry (its jerk
+ * exactly table_jerk[i]; x, v, a integrated exactly from the start) and the rest at the
+ * end, at x0 + distance exactly; one step per entry (a ramp of A = jerk samples Te over
+ * samples: a replan keeps them as any plan's); N[] the jerk times of p (those of a
+ * commanded stop or move).  djl_plan_motion refuses profile 4. */
+djl_status djl_plan_table(const djl_params *p, const djl_table *t, djl_plan *plan,
+                          djl_error *err);
+
+/* Whether plan is the one djl_plan_table makes from p and t (not replanned): the steps
+ * those of the table, bit for bit, the pieces' starts, jerks and end.  NULL if so, else
+ * why not (for checking an FMU state). */
+const char *djl_table_plan_flaw(const djl_plan *plan, const djl_params *p, const djl_table *t);
 
 /* ------------------------------------------------------------------------ */
 /* the motion on a sample grid (djl_eval.c)                                  */

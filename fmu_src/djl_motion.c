@@ -995,6 +995,10 @@ djl_status djl_plan_motion(const djl_params *p, djl_plan *plan, djl_error *err)
     int precise = 0, kl, kt;
     if (err) memset(err, 0, sizeof(*err));
     if ((st = djl_validate(p, err)) != DJL_OK) return st;
+    if (p->profile == DJL_PROFILE_TABLE)
+        return set_error(err, DJL_E_PARAM, "profile", (double)p->profile,
+                         "profile = 4 (table) is planned from its table (djl_plan_table), not "
+                         "from its parameters alone");
     st = plan_in_units(p, p, 0, plan, err, 0);
     if (st == DJL_OK && plan_clean(plan)) return DJL_OK;
     /* Times are counted in samples from a segment's start; with jerk times

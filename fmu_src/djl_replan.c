@@ -600,10 +600,26 @@ static int stop_passes(const djl_plan *old, const replan_state *r, const transit
     xe = s.x - r->x; /* where the plan in progress rests, relative to o */
     sg = r->v > 0.0 ? 1.0 : r->v < 0.0 ? -1.0 : xe > 0.0 ? 1.0 : xe < 0.0 ? -1.0 : 0.0;
     if (sg == 0.0 || sg * xe < 0.0) return 0;
-    for (i = 0; i < old->n_pieces; i++) /* at rest or turning back before the end? */
-        if (old->piece[i].k > r->o && old->piece[i].k < old->k_end &&
-            sg * old->piece[i].v <= 1e-12 * r->v_max)
-            return 0;
+    if (old->p.profile == DJL_PROFILE_TABLE && !old->replanned) {
+        /* a replayed table may rest on the way, and at its target before its end (pieces
+         * of zero jerk): only turning back bounds nothing -- a velocity against the move
+         * at a piece's start or where it is least inside a piece, from o on */
+        for (i = 0; i + 1 < old->n_pieces; i++) {
+            const djl_piece *pc = &old->piece[i];
+            double L = (double)(old->piece[i + 1].k - pc->k) * r->Te, ts;
+            if (old->piece[i + 1].k <= r->o) continue;
+            if (pc->k > r->o && sg * pc->v < -1e-12 * r->v_max) return 0;
+            ts = pc->j != 0.0 ? -pc->a / pc->j : -1.0;
+            if (ts > 0.0 && ts < L && sg * (pc->v + ts * (pc->a + 0.5 * ts * pc->j)) <
+                                          -1e-12 * r->v_max)
+                return 0;
+        }
+    } else {
+        for (i = 0; i < old->n_pieces; i++) /* at rest or turning back before the end? */
+            if (old->piece[i].k > r->o && old->piece[i].k < old->k_end &&
+                sg * old->piece[i].v <= 1e-12 * r->v_max)
+                return 0;
+    }
     T = imax2(ramps_end(r, t->s, t->n), r->b - r->o);
     (void)walk(r, t->s, t->n, T, NULL, st);
     /* rounding: a trillionth of the distance to that rest and of a sample at v_max, and

@@ -66,7 +66,9 @@ void djl_params_default(djl_params *p)
 
 static int stage_used(int profile, int stage)
 {
-    if (profile == DJL_PROFILE_DJL) return 1;
+    /* a table's jerk is its own; T_F1..T_F4 are the jerk times of the stages a commanded
+     * stop or move adds to it (djl_table.c), checked as DJL's */
+    if (profile == DJL_PROFILE_DJL || profile == DJL_PROFILE_TABLE) return 1;
     if (profile == DJL_PROFILE_JL) return stage == 0;
     return 0;
 }
@@ -107,9 +109,10 @@ djl_status djl_validate(const djl_params *p, djl_error *err)
     int i, n;
     double reach;
 
-    if (p->profile < DJL_PROFILE_AL || p->profile > DJL_PROFILE_DJL)
+    if (p->profile < DJL_PROFILE_AL || p->profile > DJL_PROFILE_TABLE)
         return set_error(err, DJL_E_PARAM, "profile", (double)p->profile,
-                         "profile = %d: must be 1 (AL), 2 (JL) or 3 (DJL)", (int)p->profile);
+                         "profile = %d: must be 1 (AL), 2 (JL), 3 (DJL) or 4 (table)",
+                         (int)p->profile);
     if (p->short_stage != DJL_SHORT_STRETCH && p->short_stage != DJL_SHORT_OVERLAP)
         return set_error(err, DJL_E_PARAM, "short_stage", (double)p->short_stage,
                          "short_stage = %d: must be 1 (stretch the stage to its jerk times) "
@@ -128,7 +131,11 @@ djl_status djl_validate(const djl_params *p, djl_error *err)
             if (N < 1.0)
                 return set_error(err, DJL_E_PARAM, name, T,
                                  "%s = %g s rounds to 0 samples at Te = %g s: a jerk time must "
-                                 "be at least half a sampling period", name, T, p->Te);
+                                 "be at least half a sampling period%s", name, T, p->Te,
+                                 p->profile == DJL_PROFILE_TABLE
+                                     ? " (profile = 4, table: the jerk times of the stages a "
+                                       "commanded stop or move adds)"
+                                     : "");
             if (N > (double)DJL_MAX_FILTER_SAMPLES)
                 return set_error(err, DJL_E_PARAM, name, T,
                                  "%s = %g s is %.0f samples at Te = %g s: more than the %d "
@@ -149,6 +156,14 @@ djl_status djl_validate(const djl_params *p, djl_error *err)
         return set_error(err, DJL_E_PARAM, "n_segments", (double)p->n_segments,
                          "n_segments = %d: must be 0 (single move given by distance and v_e) or "
                          "1..%d", (int)p->n_segments, DJL_MAX_SEGMENTS);
+    if (p->profile == DJL_PROFILE_TABLE && p->n_segments != 0)
+        return set_error(err, DJL_E_PARAM, "n_segments", (double)p->n_segments,
+                         "n_segments = %d with profile = 4 (table): a table is one move, "
+                         "from x0 to x0 + distance (n_segments must be 0)", (int)p->n_segments);
+    if (p->profile == DJL_PROFILE_TABLE && p->v_e != 0.0)
+        return set_error(err, DJL_E_PARAM, "v_e", p->v_e,
+                         "v_e = %g m/s with profile = 4 (table): a table ends at rest "
+                         "(v_e must be 0)", p->v_e);
 
     n = p->n_segments == 0 ? 1 : p->n_segments;
     reach = djl_fabs(p->x0);

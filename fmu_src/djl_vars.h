@@ -4,7 +4,7 @@
 #define DJL_VARS_H
 
 #define DJL_MODEL_IDENTIFIER "JerkLimitedTrajectory"
-#define DJL_INSTANTIATION_TOKEN "{29dde695-320a-5019-967e-f29722ca65b0}"
+#define DJL_INSTANTIATION_TOKEN "{bfb5f9ff-4d82-5e51-96fe-585a2ecaf217}"
 #define DJL_VARS_MAX_SEGMENTS 32
 
 /* value references (arrays: first element; element i at base + i) */
@@ -59,6 +59,9 @@ typedef enum {
     VR_SHAPER_N = 64,
     VR_SHAPER_AMPLITUDE = 300,
     VR_SHAPER_DELAY = 400,
+    VR_TABLE_N = 65,
+    VR_TABLE_SAMPLES = 1000,
+    VR_TABLE_JERK = 2000,
 } djl_vr;
 
 /* log categories, in modelDescription order */
@@ -74,6 +77,7 @@ typedef enum {
     PROFILE_AL = 1,
     PROFILE_JL = 2,
     PROFILE_DJL = 3,
+    PROFILE_TABLE = 4,
 } djl_enum_profile;
 
 typedef enum {
@@ -163,8 +167,11 @@ static const djl_var_info djl_var_table[] = {
     {64u, 'I', 'p', 1, "shaper_n"},
     {300u, 'R', 'p', 8, "shaper_amplitude"},
     {400u, 'R', 'p', 8, "shaper_delay"},
+    {65u, 'I', 'p', 1, "table_n"},
+    {1000u, 'I', 'p', 256, "table_samples"},
+    {2000u, 'R', 'p', 256, "table_jerk"},
 };
-#define DJL_N_VARS 50
+#define DJL_N_VARS 53
 
 static const char *const djl_log_category_names[] = {
     "logEvents",
@@ -180,16 +187,18 @@ static const char *const djl_log_category_names[] = {
 #include "djl_core.h"
 
 /* Where a parameter is stored: a field of djl_params (djl_core.h), a field of
- * another struct of the core (the input shaper's), or beside them (a parameter the
- * core does not take); each user of the table keeps its own. */
+ * another struct of the core (the input shaper's, the table's), or beside them (a
+ * parameter the core does not take); each user of the table keeps its own. */
 typedef enum {
     DJL_HOME_PARAMS = 0,
     DJL_HOME_JERK_SOURCE = 1,
     DJL_HOME_T_START = 2,
     DJL_HOME_SHAPER = 3,
+    DJL_HOME_TABLE = 4,
 } djl_param_home;
 
-/* Parameter table: element i of an array at offset + i * sizeof(double). */
+/* Parameter table: element i of an array at offset + i * the size of its type
+ * (double for 'R', int32_t for 'I' and 'E'). */
 typedef struct {
     unsigned int vr;
     const char *name;
@@ -197,7 +206,8 @@ typedef struct {
     unsigned short size; /* elements */
     unsigned char home;  /* djl_param_home */
     size_t offset;       /* DJL_HOME_PARAMS: offset of the field in djl_params;
-                            DJL_HOME_SHAPER: in djl_shaper_params */
+                            DJL_HOME_SHAPER: in djl_shaper_params;
+                            DJL_HOME_TABLE: in djl_table */
 } djl_param_info;
 
 static const djl_param_info djl_param_table[] = {
@@ -227,8 +237,11 @@ static const djl_param_info djl_param_table[] = {
     {VR_SHAPER_N, "shaper_n", 'I', 1, DJL_HOME_SHAPER, offsetof(djl_shaper_params, n)},
     {VR_SHAPER_AMPLITUDE, "shaper_amplitude", 'R', 8, DJL_HOME_SHAPER, offsetof(djl_shaper_params, amplitude)},
     {VR_SHAPER_DELAY, "shaper_delay", 'R', 8, DJL_HOME_SHAPER, offsetof(djl_shaper_params, delay)},
+    {VR_TABLE_N, "table_n", 'I', 1, DJL_HOME_TABLE, offsetof(djl_table, n)},
+    {VR_TABLE_SAMPLES, "table_samples", 'I', 256, DJL_HOME_TABLE, offsetof(djl_table, samples)},
+    {VR_TABLE_JERK, "table_jerk", 'R', 256, DJL_HOME_TABLE, offsetof(djl_table, jerk)},
 };
-#define DJL_N_PARAMS 26
+#define DJL_N_PARAMS 29
 
 /* Compile-time checks: each field has its parameter's type and size, and the
  * enumeration codes are the core's. */
@@ -256,11 +269,15 @@ typedef char djl_param_table_check[(
     sizeof(((djl_shaper_params *)0)->source) == 1 * sizeof(int32_t) &&
     sizeof(((djl_shaper_params *)0)->n) == 1 * sizeof(int32_t) &&
     sizeof(((djl_shaper_params *)0)->amplitude) == 8 * sizeof(double) &&
-    sizeof(((djl_shaper_params *)0)->delay) == 8 * sizeof(double)
+    sizeof(((djl_shaper_params *)0)->delay) == 8 * sizeof(double) &&
+    sizeof(((djl_table *)0)->n) == 1 * sizeof(int32_t) &&
+    sizeof(((djl_table *)0)->samples) == 256 * sizeof(int32_t) &&
+    sizeof(((djl_table *)0)->jerk) == 256 * sizeof(double)
     ) ? 1 : -1];
 typedef char djl_enum_check[((int)PROFILE_AL == (int)DJL_PROFILE_AL &&
     (int)PROFILE_JL == (int)DJL_PROFILE_JL &&
     (int)PROFILE_DJL == (int)DJL_PROFILE_DJL &&
+    (int)PROFILE_TABLE == (int)DJL_PROFILE_TABLE &&
     (int)SHORT_STAGE_STRETCH == (int)DJL_SHORT_STRETCH &&
     (int)SHORT_STAGE_OVERLAP == (int)DJL_SHORT_OVERLAP &&
     (int)SHAPER_NONE == (int)DJL_SHAPER_NONE &&
@@ -272,7 +289,7 @@ typedef char djl_enum_check[((int)PROFILE_AL == (int)DJL_PROFILE_AL &&
     (int)SHAPER_SOURCE_F_MODE == (int)DJL_SHAPER_SOURCE_F_MODE) ? 1 : -1];
 
 /* item names by value ("" where no item has the value) */
-static const char *const djl_profile_names[] = {"", "AL", "JL", "DJL"};
+static const char *const djl_profile_names[] = {"", "AL", "JL", "DJL", "table"};
 static const char *const djl_short_stage_names[] = {"", "stretch", "overlap"};
 static const char *const djl_jerk_source_names[] = {"", "parameters", "f_mode", "f_mode_ahead"};
 static const char *const djl_shaper_names[] = {"none", "ZV", "ZVD", "EI", "custom"};

@@ -52,7 +52,8 @@ const char *model_state_name(int state);
 /* the data of an instance                                                  */
 
 #define MODEL_MAGIC 0x4a4c4446u /* "FDLJ" */
-#define MODEL_LAYOUT 7u          /* of model_data: a state of another layout is refused */
+#define MODEL_LAYOUT 8u          /* of model_data: a state of another layout is refused (8: the
+                                    replayed table, djl_table, and 264 plan steps) */
 
 /* The figures of the parametric move planned at initialisation (the calculated
  * parameters motion_time, N_F1..N_F4, v_reached, a_reached, d_reached): commands
@@ -105,6 +106,7 @@ typedef struct {
     /* input shaping (docs/generator.md, "Input shaping") */
     djl_shaper_params sp;   /* parameters shaper, f_shaper, zeta_shaper, shaper_source, shaper_n,
                                shaper_amplitude, shaper_delay */
+    djl_table table;        /* parameters table_n, table_samples, table_jerk (profile = 4) */
     djl_shaper shaper;      /* designed with the plan (n = 0: no shaping) */
     int32_t shaper_cursor[DJL_MAX_SHAPER_IMPULSES]; /* piece hints of the delayed copies */
     djl_shaper_memory mem;  /* what the delayed copies read of the plans replans replaced; the

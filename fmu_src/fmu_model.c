@@ -27,6 +27,7 @@ void model_defaults(model_data *d)
     d->jerk_source = JERK_SOURCE_PARAMETERS;
     d->f_mode = 10.0;
     djl_shaper_params_default(&d->sp);
+    djl_table_default(&d->table);
 }
 
 /* Where element index of parameter base (its value reference) is stored (djl_vars.h's
@@ -37,13 +38,16 @@ static void *param_field(model_data *d, unsigned int base, unsigned int index)
     int i;
     for (i = 0; i < DJL_N_PARAMS; i++) {
         const djl_param_info *pi = &djl_param_table[i];
+        size_t at;
         if (pi->vr != base) continue;
         if (index >= pi->size) return NULL;
+        at = pi->offset + index * (pi->type == 'R' ? sizeof(double) : sizeof(int32_t));
         switch (pi->home) {
-        case DJL_HOME_PARAMS: return (char *)&d->p + pi->offset + index * sizeof(double);
+        case DJL_HOME_PARAMS: return (char *)&d->p + at;
         case DJL_HOME_T_START: return &d->t_start;
         case DJL_HOME_JERK_SOURCE: return &d->jerk_source;
-        case DJL_HOME_SHAPER: return (char *)&d->sp + pi->offset + index * sizeof(double);
+        case DJL_HOME_SHAPER: return (char *)&d->sp + at;
+        case DJL_HOME_TABLE: return (char *)&d->table + at;
         default: return NULL;
         }
     }
@@ -82,8 +86,20 @@ static void log_plan(const model_instance *m)
               djl_profile_names[pl->p.profile], (int)pl->n_segments, pl->x_target, djl_motion_time(pl),
               (long long)pl->k_end, pl->p.Te, pl->v_reached, pl->a_reached, pl->d_reached,
               (int)pl->N[0], (int)pl->N[1], (int)pl->N[2], (int)pl->N[3]);
+    if (pl->p.profile == DJL_PROFILE_TABLE) {
+        double jmax = 0.0;
+        for (i = 0; i < pl->n_steps; i++)
+            jmax = djl_fmax(jmax, djl_fabs(pl->piece[i].j));
+        model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
+                  "table: %d pieces, %lld samples, largest |jerk| %.17g m/s3, ends at rest at "
+                  "x0 + %.17g m; a commanded stop or move adds stages of the jerk times "
+                  "%d/%d/%d/%d samples (T_F1..T_F4)", (int)pl->n_steps, (long long)pl->k_end,
+                  jmax, pl->x_target, (int)pl->N[0], (int)pl->N[1], (int)pl->N[2],
+                  (int)pl->N[3]);
+    }
     for (i = 0; i < 4; i++) {
-        int used = pl->p.profile == DJL_PROFILE_DJL || (pl->p.profile == DJL_PROFILE_JL && i == 0);
+        int used = pl->p.profile == DJL_PROFILE_DJL || pl->p.profile == DJL_PROFILE_TABLE ||
+                   (pl->p.profile == DJL_PROFILE_JL && i == 0);
         double T = pl->p.T_F[i], Ta = djl_applied_jerk_time(pl, i);
         if (used && djl_fabs(T - Ta) > 1e-9 * T)
             model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
@@ -91,7 +107,7 @@ static void log_plan(const model_instance *m)
                       "time applied is %d samples = %.17g s",
                       i + 1, T, pl->p.Te, (int)pl->N[i], Ta);
     }
-    for (i = 0; i < pl->n_segments; i++) {
+    for (i = 0; i < pl->n_segments && pl->p.profile != DJL_PROFILE_TABLE; i++) {
         const djl_segment_plan *s = &pl->seg[i];
         model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
                   "segment %d: start sample %lld, lead %lld, acceleration stage %lld samples at "
@@ -240,6 +256,10 @@ static model_status ensure_plan(model_instance *m, const char *fn)
         return model_fail(m, "%s: invalid parameter jerk_source = %d: must be 1 (the jerk times "
                           "T_F1..T_F4), 2 (from the input f_mode) or 3 (from f_mode "
                           "extrapolated to each stage's start)", fn, (int)d->jerk_source);
+    if (d->jerk_source >= JERK_SOURCE_F_MODE && d->p.profile == PROFILE_TABLE)
+        return model_fail(m, "%s: invalid parameter jerk_source = %d with profile = 4 (table): "
+                          "a table has its own jerk; the jerk times of a commanded stop or move "
+                          "are T_F1..T_F4 (jerk_source must be 1)", fn, (int)d->jerk_source);
     if (d->jerk_source >= JERK_SOURCE_F_MODE) {
         int32_t Nf = jerk_samples(d->f_mode, d->p.Te);
         int i;
@@ -262,7 +282,10 @@ static model_status ensure_plan(model_instance *m, const char *fn)
         q.profile = PROFILE_DJL;
         for (i = 0; i < 4; i++) q.T_F[i] = (double)Nf * q.Te;
     }
-    st = djl_plan_motion(&q, &d->plan, &err);
+    if (q.profile == PROFILE_TABLE)
+        st = djl_plan_table(&q, &d->table, &d->plan, &err);
+    else
+        st = djl_plan_motion(&q, &d->plan, &err);
     if (st != DJL_OK)
         return model_fail(m, "%s: %s: %s", fn, djl_status_name(st), err.message);
     /* The generator samples at start_time + n Te: the motion starts at the first of those
@@ -1009,6 +1032,15 @@ const char *model_state_flaw(const model_data *d)
     if (pl->replanned != 0 && pl->replanned != 1) return "the replanned flag is neither 0 nor 1";
     if (!pl->replanned && d->jerk_source == JERK_SOURCE_PARAMETERS && !same_params(&d->p, &pl->p))
         return "its plan was not made from its parameters";
+    if (d->p.profile == DJL_PROFILE_TABLE) {
+        /* a replayed table: valid (the limits, the end at rest on the target), with
+         * jerk_source = 1; a plan not replanned since is the table's, step for step */
+        if (d->jerk_source != JERK_SOURCE_PARAMETERS)
+            return "a table with jerk times from f_mode";
+        if (djl_table_validate(&d->p, &d->table, NULL) != DJL_OK) return "its table is invalid";
+        if (!pl->replanned && (why = djl_table_plan_flaw(pl, &d->p, &d->table)) != NULL)
+            return why;
+    }
     if (pl->replanned || d->jerk_source >= JERK_SOURCE_F_MODE) {
         /* a plan of its own (a replan, or jerk times from f_mode): sound values */
         double v[7];

@@ -99,7 +99,9 @@ static int get_int32(PyObject *v, const char *key, int32_t *out)
     return 0;
 }
 
-static int get_array(PyObject *v, const char *key, double *out, int n)
+/* An array parameter: a sequence of at most n numbers into out (type 'R': doubles; 'I':
+ * int32_t), the elements not given left as they are. */
+static int get_array(PyObject *v, const char *key, char type, void *out, int n)
 {
     PyObject *seq = PySequence_Tuple(v);
     Py_ssize_t len, i;
@@ -115,7 +117,10 @@ static int get_array(PyObject *v, const char *key, double *out, int n)
         return -1;
     }
     for (i = 0; i < len; i++) {
-        if (get_double(PyTuple_GetItem(seq, i), key, &out[i]) < 0) {
+        PyObject *item = PyTuple_GetItem(seq, i);
+        int rc = type == 'R' ? get_double(item, key, (double *)out + i)
+                             : get_int32(item, key, (int32_t *)out + i);
+        if (rc < 0) {
             Py_DECREF(seq);
             return -1;
         }
@@ -124,11 +129,13 @@ static int get_array(PyObject *v, const char *key, double *out, int n)
     return 0;
 }
 
-/* The FMU parameters the engine takes: the core's, the input shaper's and t_start (not
- * jerk_source: the engine plans the parametric move, jerk times from the parameters). */
+/* The FMU parameters the engine takes: the core's, the input shaper's, the replayed
+ * table's and t_start (not jerk_source: the engine plans the parametric move, jerk times
+ * from the parameters). */
 typedef struct {
     djl_params p;
     djl_shaper_params sp;
+    djl_table table;
     double t_start;
 } engine_params;
 
@@ -138,19 +145,21 @@ static void *param_field(engine_params *e, const djl_param_info *pi)
     switch (pi->home) {
     case DJL_HOME_PARAMS: return (char *)&e->p + pi->offset;
     case DJL_HOME_SHAPER: return (char *)&e->sp + pi->offset;
+    case DJL_HOME_TABLE: return (char *)&e->table + pi->offset;
     case DJL_HOME_T_START: return &e->t_start;
     default: return NULL;
     }
 }
 
-/* Fill p and sp (from the defaults) and t_start from a dict of FMU parameter names. */
-static int parse_params(PyObject *dict, djl_params *p, djl_shaper_params *sp, double *t_start)
+/* Fill e (from the defaults) from a dict of FMU parameter names. */
+static int parse_params(PyObject *dict, engine_params *out)
 {
     PyObject *key, *value;
     Py_ssize_t pos = 0;
     engine_params e;
     djl_params_default(&e.p);
     djl_shaper_params_default(&e.sp);
+    djl_table_default(&e.table);
     e.t_start = 0.0;
     if (!PyDict_Check(dict)) {
         PyErr_SetString(PyExc_TypeError, "params must be a dict of FMU parameter names");
@@ -175,16 +184,14 @@ static int parse_params(PyObject *dict, djl_params *p, djl_shaper_params *sp, do
             return -1;
         }
         if (pi->size > 1)
-            rc = get_array(value, k, (double *)field, pi->size);
+            rc = get_array(value, k, pi->type == 'R' ? 'R' : 'I', field, pi->size);
         else if (pi->type == 'R')
             rc = get_double(value, k, (double *)field);
         else
             rc = get_int32(value, k, (int32_t *)field);
         if (rc < 0) return -1;
     }
-    *p = e.p;
-    *sp = e.sp;
-    *t_start = e.t_start;
+    *out = e;
     return 0;
 }
 
@@ -229,12 +236,14 @@ static djl_status set_engine_error(djl_error *err, const char *param, double val
     return DJL_E_PARAM;
 }
 
-/* Plan p into plan and place it on the grid of start_time (the FMU's ensure_plan, without
- * FMI): the core's status and error. */
-static djl_status plan_into(const djl_params *p, double t_start, double start_time,
-                            djl_plan *plan, djl_error *err, double *offset, int *shifted)
+/* Plan p (profile 4: the table t) into plan and place it on the grid of start_time (the
+ * FMU's ensure_plan, without FMI): the core's status and error. */
+static djl_status plan_into(const djl_params *p, const djl_table *t, double t_start,
+                            double start_time, djl_plan *plan, djl_error *err, double *offset,
+                            int *shifted)
 {
-    djl_status st = djl_plan_motion(p, plan, err);
+    djl_status st = p->profile == DJL_PROFILE_TABLE ? djl_plan_table(p, t, plan, err)
+                                                    : djl_plan_motion(p, plan, err);
     if (st != DJL_OK) return st;
     return djl_start_offset(t_start, start_time, p->Te, offset, shifted, err);
 }
@@ -264,24 +273,32 @@ static PyObject *engine_plan(PyObject *self, PyObject *args, PyObject *kwds)
     static char *kwlist[] = {"params", "start_time", NULL};
     PyObject *dict;
     double start_time = 0.0;
-    djl_params p;
-    djl_shaper_params sp;
+    engine_params *e;
     djl_error err;
     djl_status st;
     PlanObject *obj;
     (void)self;
     if (!PyArg_ParseTupleAndKeywords(args, kwds, "O|d", kwlist, &dict, &start_time))
         return NULL;
+    e = (engine_params *)PyMem_Malloc(sizeof *e); /* the table: kept off the stack */
+    if (!e) return PyErr_NoMemory();
     obj = PyObject_New(PlanObject, PlanType);
-    if (!obj) return NULL;
-    if (parse_params(dict, &p, &sp, &obj->t_start) < 0) {
+    if (!obj) {
+        PyMem_Free(e);
+        return NULL;
+    }
+    if (parse_params(dict, e) < 0) {
+        PyMem_Free(e);
         Py_DECREF(obj);
         return NULL;
     }
+    obj->t_start = e->t_start;
     obj->start_time = start_time;
     memset(&err, 0, sizeof err);
-    st = plan_into(&p, obj->t_start, start_time, &obj->plan, &err, &obj->offset, &obj->shifted);
-    if (st == DJL_OK) st = shaper_into(&sp, &obj->plan, &obj->shaper, &err);
+    st = plan_into(&e->p, &e->table, obj->t_start, start_time, &obj->plan, &err, &obj->offset,
+                   &obj->shifted);
+    if (st == DJL_OK) st = shaper_into(&e->sp, &obj->plan, &obj->shaper, &err);
+    PyMem_Free(e);
     if (st != DJL_OK) {
         Py_DECREF(obj);
         return raise_plan_error(&err, st);
@@ -942,6 +959,11 @@ static PyObject *plan_replan(PlanObject *self, PyObject *args)
         PyErr_SetString(PyExc_ValueError, "replan needs an unshaped plan");
         return NULL;
     }
+    if (self->plan.p.profile == DJL_PROFILE_TABLE) {
+        PyErr_SetString(PyExc_ValueError, "replan re-times the stages of an AL, JL or DJL "
+                        "plan: a table (profile 4) has its own jerk");
+        return NULL;
+    }
     obj = PyObject_New(PlanObject, PlanType);
     if (!obj) return NULL;
     p = self->plan.p;
@@ -950,7 +972,7 @@ static PyObject *plan_replan(PlanObject *self, PyObject *args)
     obj->start_time = self->start_time;
     obj->shaper = self->shaper;
     memset(&err, 0, sizeof err);
-    st = plan_into(&p, obj->t_start, obj->start_time, &obj->plan, &err, &obj->offset,
+    st = plan_into(&p, NULL, obj->t_start, obj->start_time, &obj->plan, &err, &obj->offset,
                    &obj->shifted);
     if (st != DJL_OK) {
         Py_DECREF(obj);
@@ -1039,10 +1061,9 @@ static PyObject *engine_motion_start(PyObject *self, PyObject *args)
 /* ------------------------------------------------------- Z synchronisation */
 
 typedef struct {
-    djl_params p;
-    djl_shaper_params sp;
+    engine_params e;
     djl_shaper shaper;
-    double t_start, start_time;
+    double start_time;
     djl_plan plan; /* scratch: large, kept off the stack */
 } sync_ctx;
 
@@ -1051,9 +1072,10 @@ static djl_status time_at(sync_ctx *c, double v, double *T, djl_error *err)
     double off;
     int shifted;
     djl_status st;
-    c->p.v_max = v;
-    st = plan_into(&c->p, c->t_start, c->start_time, &c->plan, err, &off, &shifted);
-    if (st == DJL_OK) st = shaper_into(&c->sp, &c->plan, &c->shaper, err);
+    c->e.p.v_max = v;
+    st = plan_into(&c->e.p, &c->e.table, c->e.t_start, c->start_time, &c->plan, err, &off,
+                   &shifted);
+    if (st == DJL_OK) st = shaper_into(&c->e.sp, &c->plan, &c->shaper, err);
     if (st == DJL_OK) *T = djl_shaper_motion_time(&c->plan, &c->shaper);
     return st;
 }
@@ -1076,13 +1098,13 @@ static PyObject *engine_sync_velocity(PyObject *self, PyObject *args, PyObject *
         return NULL;
     c = (sync_ctx *)PyMem_Malloc(sizeof *c);
     if (!c) return PyErr_NoMemory();
-    if (parse_params(dict, &c->p, &c->sp, &c->t_start) < 0) {
+    if (parse_params(dict, &c->e) < 0) {
         PyMem_Free(c);
         return NULL;
     }
     c->start_time = start_time;
     memset(&err, 0, sizeof err);
-    d = fabs(c->p.distance);
+    d = fabs(c->e.p.distance);
     Py_BEGIN_ALLOW_THREADS
     st = time_at(c, v_cap, &t_cap, &err);
     if (st == DJL_OK) {

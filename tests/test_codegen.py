@@ -76,6 +76,12 @@ def test_core_capacity_matches_spec():
     assert f"#define DJL_MAX_SHAPER_DELAY_SAMPLES {spec.MAX_SHAPER_DELAY_SAMPLES}" in core
     tol = re.search(r"#define DJL_SHAPER_SUM_TOLERANCE (\S+)", core).group(1)
     assert float(tol) == spec.SHAPER_AMPLITUDE_TOLERANCE
+    assert f"#define DJL_MAX_TABLE {spec.MAX_TABLE}" in core
+    for name, value in (("DJL_TABLE_END_TOLERANCE", spec.TABLE_END_TOLERANCE),
+                        ("DJL_TABLE_LIMIT_TOLERANCE", spec.TABLE_LIMIT_TOLERANCE)):
+        assert float(re.search(rf"#define {name} (\S+)", core).group(1)) == value
+    # a table's plan: one piece per entry and the rest, one step per entry
+    assert spec.MAX_TABLE + 1 <= 2 * 4 * spec.MAX_SEGMENTS + spec.MAX_SEGMENTS + 2
     horizon = int(re.search(r"#define DJL_MAX_MOTION_SAMPLES (\d+)LL", core).group(1))
     # fmu_model.c refuses Te * DJL_MAX_MOTION_SAMPLES > DJL_MAX_POSITION: MAX_TE passes
     assert spec.MAX_TE * horizon <= spec.MAX_POSITION
@@ -130,6 +136,6 @@ def test_enumeration_constants_are_the_spec():
 
 
 def test_profile_codes_are_derived_from_the_enumeration():
-    assert spec.PROFILE_CODES == {"AL": 1, "JL": 2, "DJL": 3}
+    assert spec.PROFILE_CODES == {"AL": 1, "JL": 2, "DJL": 3, "table": 4}
     assert spec.PROFILE_CODES == {n: v for n, v, _ in spec.ENUMERATIONS["Profile"]}
     assert spec.PROFILE_NAMES == {v: n for n, v in spec.PROFILE_CODES.items()}

@@ -74,7 +74,7 @@ def test_model_description_declares_capabilities(fmus, version):
     assert by["profile"].type == by["short_stage"].type == "Enumeration"
     items = {t.name: [(i.name, int(i.value)) for i in t.items]
              for t in md.typeDefinitions if t.type == "Enumeration"}
-    assert items == {"Profile": [("AL", 1), ("JL", 2), ("DJL", 3)],
+    assert items == {"Profile": [("AL", 1), ("JL", 2), ("DJL", 3), ("table", 4)],
                      "ShortStage": [("stretch", 1), ("overlap", 2)],
                      "JerkSource": [("parameters", 1), ("f_mode", 2), ("f_mode_ahead", 3)],
                      "Shaper": [("none", 0), ("ZV", 1), ("ZVD", 2), ("EI", 3), ("custom", 4)],
@@ -96,7 +96,7 @@ def test_model_description_declares_capabilities(fmus, version):
             assert v.declaredType is not None and v.declaredType.quantity == q, v.name
             assert v.declaredType.displayUnit == disp, v.name
             assert float(display[v.unit][disp]) == 1000.0
-    bounds = {"profile": (1, 3), "short_stage": (1, 2), "n_segments": (0, spec.MAX_SEGMENTS),
+    bounds = {"profile": (1, 4), "short_stage": (1, 2), "n_segments": (0, spec.MAX_SEGMENTS),
               "Te": (0.0, spec.MAX_TE), "x0": (-spec.MAX_POSITION, spec.MAX_POSITION),
               "distance": (-spec.MAX_POSITION, spec.MAX_POSITION)}
     for name, (lo, hi) in bounds.items():

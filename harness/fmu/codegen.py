@@ -20,9 +20,10 @@ from . import spec
 from .spec import VARIABLES, Variable
 
 # the generator core (map in docs/generator.md): parameter checks, one segment (stages
-# sized, landing solved), a motion of segments, evaluation of samples, input shaping
+# sized, landing solved), a motion of segments, evaluation of samples, input shaping, a
+# replayed table
 CORE_SOURCES = ("djl_validate.c", "djl_segment.c", "djl_motion.c", "djl_replan.c", "djl_eval.c",
-                "djl_shaper.c")
+                "djl_shaper.c", "djl_table.c")
 # the FMU, independent of the FMI version, from the bottom up: the base (the instance's data,
 # logging and error reporting, the variable table lookup), the model (its variables,
 # planning, DoStep, commands) and the instance (life cycle, state machine, FMU state)
@@ -47,10 +48,13 @@ C_PARAM_STRUCTS: dict[str, tuple[str, dict[str, str]]] = {
     "DJL_HOME_SHAPER": ("djl_shaper_params", {
         "shaper": "kind", "f_shaper": "f", "zeta_shaper": "zeta", "shaper_source": "source",
         "shaper_n": "n", "shaper_amplitude": "amplitude", "shaper_delay": "delay"}),
+    "DJL_HOME_TABLE": ("djl_table", {
+        "table_n": "n", "table_samples": "samples", "table_jerk": "jerk"}),
 }
 """Parameters stored in another struct of the core than ``djl_params`` (home: the struct and,
-for each parameter, its field): the input shaper's (``djl_shaper_params``, ``djl_core.h``),
-which each user of the table keeps beside its ``djl_params``."""
+for each parameter, its field): the input shaper's (``djl_shaper_params``, ``djl_core.h``)
+and the replayed table's (``djl_table``), which each user of the table keeps beside its
+``djl_params``."""
 
 
 def _struct_home(name: str) -> tuple[str, str, str] | None:
@@ -216,8 +220,8 @@ def _c_parameter_table() -> list[str]:
         '#include "djl_core.h"',
         "",
         "/* Where a parameter is stored: a field of djl_params (djl_core.h), a field of",
-        " * another struct of the core (the input shaper's), or beside them (a parameter the",
-        " * core does not take); each user of the table keeps its own. */",
+        " * another struct of the core (the input shaper's, the table's), or beside them (a",
+        " * parameter the core does not take); each user of the table keeps its own. */",
         "typedef enum {",
         "    DJL_HOME_PARAMS = 0,",
     ]
@@ -227,7 +231,8 @@ def _c_parameter_table() -> list[str]:
     lines += [
         "} djl_param_home;",
         "",
-        "/* Parameter table: element i of an array at offset + i * sizeof(double). */",
+        "/* Parameter table: element i of an array at offset + i * the size of its type",
+        " * (double for 'R', int32_t for 'I' and 'E'). */",
         "typedef struct {",
         "    unsigned int vr;",
         "    const char *name;",
@@ -235,7 +240,8 @@ def _c_parameter_table() -> list[str]:
         "    unsigned short size; /* elements */",
         "    unsigned char home;  /* djl_param_home */",
         "    size_t offset;       /* DJL_HOME_PARAMS: offset of the field in djl_params;",
-        "                            DJL_HOME_SHAPER: in djl_shaper_params */",
+        "                            DJL_HOME_SHAPER: in djl_shaper_params;",
+        "                            DJL_HOME_TABLE: in djl_table */",
         "} djl_param_info;",
         "",
         "static const djl_param_info djl_param_table[] = {",

@@ -406,17 +406,20 @@ class GeneratorFMU:
         """Set parameters by name (before :meth:`initialize`).
 
         Values are checked against the variable's type before anything is set:
-        an Integer/Int32 or Enumeration variable (``profile``, ``short_stage``, ``n_segments``)
-        takes an int (a float, even 2.0, is refused: never truncated or taken
-        for an integer), a Real/Float64 a number, a Boolean a bool; a bool is
-        never taken for a number.
+        an Integer/Int32 or Enumeration variable (``profile``, ``short_stage``, ``n_segments``,
+        the elements of ``table_samples``) takes an int (a float, even 2.0, is refused: never
+        truncated or taken for an integer), a Real/Float64 a number, a Boolean a bool; a bool
+        is never taken for a number.  An array parameter (``seg_distance``, ``shaper_delay``,
+        ``table_jerk``, ...) takes a sequence of at most its size, the same in FMI 2 (its
+        elements ``name[i]``) and FMI 3 (one array variable): the elements not given take the
+        parameter's start value.
 
         Raises
         ------
         TypeError
             A value of the wrong type (the message names the variable).
         ValueError
-            An integer out of the Int32 range.
+            An integer out of the Int32 range, or more values than an array holds.
         KeyError
             An unknown variable.
         """
@@ -425,21 +428,22 @@ class GeneratorFMU:
             if self.fmi_version == 3:
                 var = self.variable(name)
                 vals = _as_list(name, value) if var.dimensions else [value]
-                if var.dimensions:
-                    size = int(var.dimensions[0].start)
-                    vals = (vals + [0.0] * size)[:size]
+                size = int(var.dimensions[0].start) if var.dimensions else 1
                 vrs, typ = [var.valueReference], var.type
             else:
                 els = self._elements(name)
                 vals = _as_list(name, value) if len(els) > 1 else [value]
-                if len(els) > 1:
-                    vals = (vals + [0.0] * len(els))[: len(els)]
+                size = len(els)
                 vrs, typ = [e.valueReference for e in els], els[0].type
             kind = {"Float64": "Real", "Real": "Real", "Int32": "Integer",
                     "Integer": "Integer", "Boolean": "Boolean",
                     "Enumeration": "Integer"}.get(typ)
             if kind is None:
                 raise TypeError(f"{name}: unsupported type {typ}")
+            if size > 1:  # an array: the elements not given take its start value
+                if len(vals) > size:
+                    raise ValueError(f"{name}: {len(vals)} values, the array holds {size}")
+                vals = vals + [_array_pad(name, kind)] * (size - len(vals))
             todo.append((kind, typ, vrs, [_convert(name, kind, x) for x in vals]))
         for kind, typ, vrs, vals in todo:
             if self.fmi_version == 3:
@@ -747,6 +751,20 @@ def _as_list(name: str, value: Any) -> list[Any]:
         return list(np.atleast_1d(np.asarray(value, dtype=object)).ravel())
     except Exception as e:  # noqa: BLE001
         raise TypeError(f"{name}: expected a sequence of numbers, got {value!r}") from e
+
+
+def _array_pad(name: str, kind: str) -> Any:
+    """Value of the elements of array parameter ``name`` that a caller leaves out.
+
+    The parameter's start value (:mod:`harness.fmu.spec`) when it is of ``kind``: ``1`` for
+    ``table_samples``, ``0.0`` for the Real arrays; else 0 of the kind.
+    """
+    var = spec.BY_NAME.get(name)
+    start = var.start if var is not None else None
+    if kind == "Integer":
+        return int(start) if isinstance(start, int) and not isinstance(start, bool) else 0
+    return float(start) if isinstance(start, (int, float)) and not isinstance(start, bool) \
+        else 0.0
 
 
 _INT32 = (-(2**31), 2**31 - 1)

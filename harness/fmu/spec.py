@@ -75,6 +75,7 @@ ENUMERATIONS: dict[str, tuple[tuple[str, int, str], ...]] = {
         ("AL", 1, "acceleration-limited"),
         ("JL", 2, "jerk-limited, one jerk time T_F1"),
         ("DJL", 3, "dissociated jerk-limited, jerk times T_F1..T_F4"),
+        ("table", 4, "piecewise-constant jerk replayed from table_samples / table_jerk"),
     ),
     "ShortStage": (
         ("stretch", 1, "lengthen a short stage so that every constant-jerk stage lasts its "
@@ -107,7 +108,8 @@ ENUMERATIONS: dict[str, tuple[tuple[str, int, str], ...]] = {
 ``fmi2SetInteger``, FMI 3 with ``fmi3SetInt64`` (the FMU also takes ``fmi3SetInt32``)."""
 
 PROFILE_CODES: dict[str, int] = {name: value for name, value, _ in ENUMERATIONS["Profile"]}
-"""Code of each profile by name (``{"AL": 1, "JL": 2, "DJL": 3}``), from :data:`ENUMERATIONS`."""
+"""Code of each profile by name (``{"AL": 1, "JL": 2, "DJL": 3, "table": 4}``), from
+:data:`ENUMERATIONS`."""
 
 PROFILE_NAMES: dict[int, str] = {value: name for name, value in PROFILE_CODES.items()}
 """Name of each profile code (the inverse of :data:`PROFILE_CODES`)."""
@@ -131,6 +133,18 @@ MAX_SHAPER_DELAY_SAMPLES = 4096
 
 SHAPER_AMPLITUDE_TOLERANCE = 1e-9
 """A custom shaper's amplitudes must sum to 1 within this (``DJL_SHAPER_SUM_TOLERANCE``)."""
+
+MAX_TABLE = 256
+"""Capacity of the replayed table's arrays (``DJL_MAX_TABLE`` in ``djl_core.h``): pieces of
+profile 4 (``table``)."""
+
+TABLE_END_TOLERANCE = 1e-9
+"""A table must end at rest at ``x0 + distance`` within this of its own scale (its largest
+acceleration, velocity and travel; ``DJL_TABLE_END_TOLERANCE``)."""
+
+TABLE_LIMIT_TOLERANCE = 1e-10
+"""A table's velocity and acceleration may pass v_max, a_max, d_max by this much of each limit
+(``DJL_TABLE_LIMIT_TOLERANCE``)."""
 
 
 @dataclass(frozen=True)
@@ -206,7 +220,9 @@ VARIABLES: tuple[Variable, ...] = (
     # --- parameters (issue #2 contract) ---------------------------------------
     _p("profile", 1, "Enumeration", 3, "Profile: 1 = AL (acceleration-limited), 2 = JL "
        "(jerk-limited, one jerk time T_F1), 3 = DJL (dissociated jerk-limited, jerk times "
-       "T_F1..T_F4)", min=1, max=3, declared_type="Profile"),
+       "T_F1..T_F4), 4 = table (the jerk table_jerk[i] for table_samples[i] samples, i <= "
+       "table_n, replayed from x0; it must end at rest at x0 + distance)", min=1, max=4,
+       declared_type="Profile"),
     _p("Te", 2, "Real", DEFAULT_TE, "Sampling period of the generator (any communication step "
        "is accepted: outputs are the profile's exact values at the communication point)",
        "s", c_name="TE", positive=True, max=MAX_TE),
@@ -320,6 +336,16 @@ VARIABLES: tuple[Variable, ...] = (
     _p("shaper_delay", 400, "Real", 0.0, "Delay of each impulse of the custom shaper, >= 0, at "
        f"most {MAX_SHAPER_DELAY_SAMPLES} samples of Te (with shaper_source = 2: the delay at "
        "f_shaper, scaled to f_mode)", "s", size=MAX_SHAPER_IMPULSES, min=0.0),
+    # --- replayed table (issue #33) ------------------------------------------------
+    _p("table_n", 65, "Integer", 0, f"Pieces of the table replayed by profile = 4, 0..{MAX_TABLE}",
+       min=0, max=MAX_TABLE),
+    _p("table_samples", 1000, "Integer", 1, "Length of each piece of the table (profile = 4), "
+       f"in samples of Te, 1..{MAX_FILTER_SAMPLES}", size=MAX_TABLE, min=1,
+       max=MAX_FILTER_SAMPLES),
+    _p("table_jerk", 2000, "Real", 0.0, "Jerk over each piece of the table (profile = 4), at "
+       "most (a_max + d_max)/Te in magnitude; the table must keep the speed within v_max and the "
+       "acceleration within [-d_max, a_max] (mirrored for distance < 0) and end at rest at x0 + "
+       "distance", "m/s3", size=MAX_TABLE),
 )
 
 PARAMETERS = tuple(v for v in VARIABLES if v.causality == "parameter")

@@ -11,5 +11,7 @@ module                   what it holds
 :mod:`.master`           the one master loop (:func:`~.master.cosimulate`),
                          :class:`~.master.CoSimResult`, map-error re-runs
 :mod:`.session`          :class:`~.session.Session`: a scenario's two axes on one engine
+:mod:`.jerk_table`       :class:`~.jerk_table.JerkTable`: a reference replayed sample by
+                         sample (profile ``table``)
 =======================  ================================================================
 """

@@ -33,6 +33,7 @@ from ..uncertainty import Perturbation, check_map_errors
 from .axis import Axis, MoveSamples
 from .fast_axis import FastAxis
 from .fmu_axis import FMUAxis
+from .jerk_table import JerkTable
 from .master import CoSimResult, cosimulate, map_error_residuals, perturbed
 from .shaped_axis import ShaperSpec
 
@@ -129,16 +130,34 @@ class Session:
 
     @staticmethod
     def move_params(sc: Scenario, profile: str, T_F: Sequence[float] | None = None,
-                    shaper: ShaperSpec | None = None) -> dict[str, Any]:
+                    shaper: ShaperSpec | None = None,
+                    table: JerkTable | None = None) -> dict[str, Any]:
         """FMU parameters of the excited axis for ``profile``, jerk times ``T_F``, ``shaper``.
 
         A shaper becomes the generator's own custom input shaper (``shaper = 4``,
         its amplitudes and delays): the FMU and the compiled engine shape the
-        profile themselves.
+        profile themselves.  Profile ``"table"`` replays ``table`` (a :class:`JerkTable`,
+        required then and refused otherwise): it must end at rest at the scenario's
+        ``x0 + distance`` within its limits (the generator checks it, naming the entry);
+        ``T_F`` then sets the jerk times of a commanded stop or move only.
+
+        Raises
+        ------
+        ValueError
+            An unknown profile; profile ``"table"`` without a table, or a table with
+            another profile.
         """
         m, s = sc.move, sc.simulation
+        if profile == "table":
+            if not isinstance(table, JerkTable):
+                raise ValueError(f"profile 'table' needs a JerkTable (table=...), got {table!r}")
+            code = spec.PROFILE_CODES["table"]
+        else:
+            if table is not None:
+                raise ValueError(f"a table is replayed by profile 'table', not {profile!r}")
+            code = spec.PROFILE_CODES[split_profile(profile)[0]]
         p: dict[str, Any] = {
-            "profile": spec.PROFILE_CODES[split_profile(profile)[0]], "Te": s.Te,
+            "profile": code, "Te": s.Te,
             "t_start": m.t_start, "x0": m.x0,
             "distance": m.distance, "v_max": m.v_max, "a_max": m.a_max, "d_max": m.d_max,
             "short_stage": s.short_stage,
@@ -147,6 +166,8 @@ class Session:
             p.update({f"T_F{i + 1}": float(T_F[i]) for i in range(4)})
         if shaper is not None:
             p.update(shaper.fmu_parameters(s.Te))
+        if table is not None:
+            p.update(table.fmu_parameters())
         return p
 
     @staticmethod
@@ -181,13 +202,14 @@ class Session:
         return plan_fn
 
     def plan_move(self, sc: Scenario, profile: str, T_F: Sequence[float] | None,
-                  shaper: ShaperSpec | None = None) -> tuple[float, bool]:
+                  shaper: ShaperSpec | None = None,
+                  table: JerkTable | None = None) -> tuple[float, bool]:
         """Plan both axes for one profile; return the excited axis' motion time and Z's sync.
 
         With ``shaper`` the generator shapes its own output (the motion time then
-        includes the last delayed copy).
+        includes the last delayed copy); profile ``"table"`` replays ``table``.
         """
-        T_x = self.axis.plan(self.move_params(sc, profile, T_F, shaper))
+        T_x = self.axis.plan(self.move_params(sc, profile, T_F, shaper, table))
         v_z, synced = self.z_velocity(sc, T_x)
         self.z_axis.plan(self.z_move_params(sc, v_z))
         # planning Z may re-plan nothing of the excited axis: it is a separate instance
@@ -196,18 +218,20 @@ class Session:
     # ------------------------------------------------------------- runs
 
     def t_stop_after_motion(self, sc: Scenario, profile: str, T_F: Sequence[float] | None,
-                            shaper: ShaperSpec | None = None) -> float:
+                            shaper: ShaperSpec | None = None,
+                            table: JerkTable | None = None) -> float:
         """End of a run that only needs the state when the excited axis' reference ends (s).
 
         The first communication point at or after the end of the motion, plus one
         step: the residual (the state at the end of the reference) is then in the
         record, and nothing after it is simulated.  The excited axis is re-planned.
         """
-        T_x = self.axis.plan(self.move_params(sc, profile, T_F, shaper))
+        T_x = self.axis.plan(self.move_params(sc, profile, T_F, shaper, table))
         return sc.move.t_start + T_x + sc.simulation.step
 
     def run(self, sc: Scenario, profile: str, T_F: Sequence[float] | None = None,
-            t_stop: float | None = None, shaper: ShaperSpec | None = None) -> CoSimResult:
+            t_stop: float | None = None, shaper: ShaperSpec | None = None,
+            table: JerkTable | None = None) -> CoSimResult:
         """Co-simulate one profile of a scenario with the given jerk times.
 
         Parameters
@@ -215,20 +239,23 @@ class Session:
         sc : Scenario
             A single-move scenario.
         profile : str
-            ``AL``, ``JL``, ``DJL`` or a variant (``DJL-robust``: its generator profile).
+            ``AL``, ``JL``, ``DJL`` or a variant (``DJL-robust``: its generator profile), or
+            ``table``.
         T_F : sequence of 4 float, optional
-            Jerk times (s); None for AL.
+            Jerk times (s); None for AL (for a table: those of a commanded stop or move).
         t_stop : float, optional
             End of the run (s); default ``simulation.t_after`` after both moves.
         shaper : ShaperSpec, optional
             The generator's input shaper (whole-sample delays): the FMU (or the
             compiled engine) produces the shaped reference itself.
+        table : JerkTable, optional
+            The reference profile ``table`` replays (:meth:`move_params`).
 
         Returns
         -------
         CoSimResult
         """
-        T_x, synced = self.plan_move(sc, profile, T_F, shaper)
+        T_x, synced = self.plan_move(sc, profile, T_F, shaper, table)
         T_z = float(self.z_axis.get("motion_time"))
         if t_stop is None:
             t_stop = sc.move.t_start + max(T_x, T_z) + sc.simulation.t_after
@@ -241,7 +268,8 @@ class Session:
 
     def map_error_residuals(self, sc: Scenario, profile: str, T_F: Sequence[float] | None,
                             errors: Sequence[float] | np.ndarray,
-                            shaper: ShaperSpec | None = None) -> np.ndarray:
+                            shaper: ShaperSpec | None = None,
+                            table: JerkTable | None = None) -> np.ndarray:
         """Residual of one profile for each map error e (the whole f(z) scaled by 1 + e).
 
         The move and the Z synchronisation are planned once on the nominal
@@ -254,13 +282,13 @@ class Session:
             If an error is not finite or is <= -1 (a frequency <= 0).
         """
         e = check_map_errors(errors)
-        self.plan_move(sc, profile, T_F, shaper)
+        self.plan_move(sc, profile, T_F, shaper, table)
         return map_error_residuals(self.axis, self.z_axis, sc.modemap.scheduled(),
                                    1.0 + e, sc.simulation.step)
 
     def residuals_under(self, sc: Scenario, profile: str, T_F: Sequence[float] | None,
-                        points: Sequence[Perturbation], shaper: ShaperSpec | None = None
-                        ) -> np.ndarray:
+                        points: Sequence[Perturbation], shaper: ShaperSpec | None = None,
+                        table: JerkTable | None = None) -> np.ndarray:
         """Residual (m) of one profile under each perturbation, stepping the plant forward.
 
         Scale-only points go through :meth:`map_error_residuals` (the plant
@@ -269,9 +297,11 @@ class Session:
         """
         pts = list(points)
         if all(p.is_scale_only for p in pts):
-            return self.map_error_residuals(sc, profile, T_F, [p.scale for p in pts], shaper)
+            return self.map_error_residuals(sc, profile, T_F, [p.scale for p in pts], shaper,
+                                            table)
         run = self.run(sc, profile, T_F,
-                       t_stop=self.t_stop_after_motion(sc, profile, T_F, shaper), shaper=shaper)
+                       t_stop=self.t_stop_after_motion(sc, profile, T_F, shaper, table),
+                       shaper=shaper, table=table)
         pivot = sc.z.z0 + 0.5 * sc.z.distance
         return np.array([r.free_amplitude for r in perturbed(run, sc.modemap.scheduled(), pts,
                                                              pivot, full=False)])

@@ -20,7 +20,7 @@ cd "$(dirname "$0")/../.."
 ROOT=$(pwd)
 COV=${COV_DIR:-/tmp/djl-coverage}
 PY=${PYTHON:-python}
-COV_PYTEST=${COV_PYTEST-"tests/test_fmu_interface.py tests/test_fmu_commands.py tests/test_fmu_shaper.py tests/test_hostile_inputs.py tests/test_fmu_artefacts.py"}
+COV_PYTEST=${COV_PYTEST-"tests/test_fmu_interface.py tests/test_fmu_commands.py tests/test_fmu_shaper.py tests/test_hostile_inputs.py tests/test_fmu_artefacts.py tests/test_fmu_table.py"}
 FMI=$($PY -c 'from harness.fmu.build import fmi_include_dir; print(fmi_include_dir())')
 rm -rf "$COV"
 mkdir -p "$COV/obj" "$COV/bin" "$COV/fmu2" "$COV/fmu3"
@@ -34,7 +34,7 @@ for src in fmu_src/*.c; do
     gcc $CFLAGS -c "$src" -o "$COV/obj/$name.o"
 done
 CORE="$COV/obj/djl_validate.o $COV/obj/djl_segment.o $COV/obj/djl_motion.o $COV/obj/djl_replan.o
-      $COV/obj/djl_eval.o $COV/obj/djl_shaper.o"
+      $COV/obj/djl_eval.o $COV/obj/djl_shaper.o $COV/obj/djl_table.o"
 FMU="$COV/obj/fmu_base.o $COV/obj/fmu_model.o $COV/obj/fmu_instance.o"
 link() { # name, sources (driver), objects
     out=$1

@@ -1524,6 +1524,273 @@ static void run_plan_consistency(void)
           why ? why : "accepted");
 }
 
+/* ------------------------------------------------ profile 4: a replayed table */
+
+/* A bang-bang table built here that comes back to rest: P (+J and -J over lengths of equal
+ * sums, zero-jerk pieces between) then -P; its piecewise cubic integrated in long double
+ * (the driver's own reference, independent of the FMU's operations). */
+#define TBL_P 11
+static const int tbl_len[TBL_P] = {7, 5, 10, 12, 3, 4, 5, 13, 9, 8, 6};
+static const double tbl_sgn[TBL_P] = {1, 0, -1, 1, 0, -1, 1, -1, 1, 0, -1};
+typedef struct {
+    int n;
+    int32_t samples[2 * TBL_P];
+    double jerk[2 * TBL_P];
+    long double k[2 * TBL_P + 1], x[2 * TBL_P + 1], v[2 * TBL_P + 1], a[2 * TBL_P + 1];
+    double X, V, A, up, down;
+} ref_table;
+
+static void ref_build(ref_table *r, double J, double Te)
+{
+    int i;
+    r->n = 2 * TBL_P;
+    r->k[0] = r->x[0] = r->v[0] = r->a[0] = 0.0L;
+    r->X = r->V = r->A = r->up = r->down = 0.0;
+    for (i = 0; i < r->n; i++) {
+        long double j, L, s;
+        r->samples[i] = tbl_len[i % TBL_P];
+        r->jerk[i] = (i < TBL_P ? 1.0 : -1.0) * tbl_sgn[i % TBL_P] * J;
+        j = r->jerk[i];
+        L = (long double)r->samples[i] * Te;
+        s = j != 0.0L ? -r->a[i] / j : -1.0L;
+        if (s > 0.0L && s < L)
+            r->V = fmax(r->V, (double)fabsl(r->v[i] + r->a[i] * s + j * s * s / 2.0L));
+        r->k[i + 1] = r->k[i] + r->samples[i];
+        r->x[i + 1] = r->x[i] + r->v[i] * L + r->a[i] * L * L / 2.0L + j * L * L * L / 6.0L;
+        r->v[i + 1] = r->v[i] + r->a[i] * L + j * L * L / 2.0L;
+        r->a[i + 1] = r->a[i] + j * L;
+        r->X = fmax(r->X, (double)fabsl(r->x[i + 1]));
+        r->V = fmax(r->V, (double)fabsl(r->v[i + 1]));
+        r->A = fmax(r->A, (double)fabsl(r->a[i + 1]));
+        r->up = fmax(r->up, (double)r->a[i + 1]);
+        r->down = fmax(r->down, (double)-r->a[i + 1]);
+    }
+}
+
+/* x, v, a at u samples after the start (after the end: at rest at its end). */
+static void ref_at(const ref_table *r, long double u, double Te, long double out[3])
+{
+    int i = 0;
+    long double s;
+    if (u < 0.0L) u = 0.0L;
+    while (i < r->n && u >= r->k[i + 1]) i++;
+    if (i == r->n) {
+        out[0] = r->x[r->n];
+        out[1] = out[2] = 0.0L;
+        return;
+    }
+    s = (u - r->k[i]) * Te;
+    out[0] = r->x[i] + r->v[i] * s + r->a[i] * s * s / 2.0L + r->jerk[i] * s * s * s / 6.0L;
+    out[1] = r->v[i] + r->a[i] * s + r->jerk[i] * s * s / 2.0L;
+    out[2] = r->a[i] + r->jerk[i] * s;
+}
+
+static void set_table(fmi2Component c, const ref_table *r, double x0, double margin)
+{
+    fmi2ValueReference vr[2 * TBL_P];
+    fmi2Integer n[2 * TBL_P];
+    int i;
+    set_int(c, VR_PROFILE, PROFILE_TABLE);
+    set_int(c, VR_TABLE_N, r->n);
+    for (i = 0; i < r->n; i++) {
+        vr[i] = VR_TABLE_SAMPLES + (fmi2ValueReference)i;
+        n[i] = r->samples[i];
+    }
+    CHECK(fmi2SetInteger(c, vr, (size_t)r->n, n) == fmi2OK, "table_samples");
+    for (i = 0; i < r->n; i++) vr[i] = VR_TABLE_JERK + (fmi2ValueReference)i;
+    CHECK(fmi2SetReal(c, vr, (size_t)r->n, r->jerk) == fmi2OK, "table_jerk");
+    set_real(c, VR_X0, x0);
+    set_real(c, VR_DISTANCE, (double)r->x[r->n]);
+    set_real(c, VR_V_MAX, r->V * (1.0 + margin));
+    set_real(c, VR_A_MAX, r->up * (1.0 + margin));
+    set_real(c, VR_D_MAX, r->down * (1.0 + margin));
+}
+
+/* Run a table at steps of 0.37 Te: the outputs against the driver's reference, the end
+ * exactly on x0 + distance, at rest; a state mid-table replayed bit for bit; forged
+ * states of a table refused by name; a stop and an execute mid-table; bad tables refused
+ * at initialisation naming the entry, the instance usable after a reset. */
+static void run_table(void)
+{
+    static model_data d;
+    static ref_table r;
+    const double Te = 1e-3, h = 0.37e-3, x0 = 0.25;
+    fmi2Component c = make("table");
+    fmi2FMUstate s = NULL, s2 = NULL;
+    fmi2Byte *buf, *forged;
+    size_t size = 0;
+    double t = 0.0, x1[400], x2[400], dist;
+    long double want[3];
+    int k, n_steps, i;
+    ref_build(&r, 400.0, Te);
+    dist = (double)r.x[r.n];
+    set_table(c, &r, x0, 1e-6);
+    CHECK(fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) == fmi2OK,
+          "init: %s", last_message);
+    CHECK(get_real(c, VR_MOTION_TIME) == (double)r.k[r.n] * Te, "motion_time %.17g",
+          get_real(c, VR_MOTION_TIME));
+    n_steps = (int)((double)r.k[r.n] / 0.37) + 20;
+    for (k = 0; k < n_steps; k++, t += h) {
+        double got[3];
+        CHECK(fmi2DoStep(c, t, h, fmi2True) == fmi2OK, "step %d: %s", k, last_message);
+        got[0] = get_real(c, VR_X);
+        got[1] = get_real(c, VR_V);
+        got[2] = get_real(c, VR_A);
+        ref_at(&r, (long double)(k + 1) * 0.37L, Te, want);
+        CHECK(fabs(got[0] - (double)(x0 + want[0])) <= 1e-12 * (r.X + x0) &&
+                  fabs(got[1] - (double)want[1]) <= 1e-12 * r.V &&
+                  fabs(got[2] - (double)want[2]) <= 1e-12 * r.A,
+              "table at %.17g s: x %.17g v %.17g a %.17g, want %.17Lg %.17Lg %.17Lg", t + h,
+              got[0], got[1], got[2], x0 + want[0], want[1], want[2]);
+        if (k == n_steps / 2) CHECK(fmi2GetFMUstate(c, &s) == fmi2OK, "get state");
+    }
+    CHECK(get_real(c, VR_X) == x0 + dist && get_real(c, VR_V) == 0.0 &&
+              get_real(c, VR_A) == 0.0 && get_real(c, VR_J) == 0.0 && get_bool(c, VR_DONE),
+          "table end: x %.17g, want %.17g", get_real(c, VR_X), x0 + dist);
+    /* the state mid-table, serialised and restored: the same outputs */
+    CHECK(fmi2SetFMUstate(c, s) == fmi2OK, "set state: %s", last_message);
+    t = 0.37e-3 * (n_steps / 2 + 1);
+    for (k = 0; k < 400; k++) {
+        fmi2DoStep(c, t + k * Te, Te, fmi2True);
+        x1[k] = get_real(c, VR_X);
+    }
+    CHECK(fmi2SerializedFMUstateSize(c, s, &size) == fmi2OK, "size");
+    buf = (fmi2Byte *)malloc(size);
+    forged = (fmi2Byte *)malloc(model_state_max_size());
+    CHECK(buf != NULL && forged != NULL, "malloc");
+    CHECK(fmi2SerializeFMUstate(c, s, buf, size) == fmi2OK, "serialise");
+    CHECK(fmi2DeSerializeFMUstate(c, buf, size, &s2) == fmi2OK, "deserialise: %s", last_message);
+    CHECK(fmi2SetFMUstate(c, s2) == fmi2OK, "set: %s", last_message);
+    for (k = 0; k < 400; k++) {
+        fmi2DoStep(c, t + k * Te, Te, fmi2True);
+        x2[k] = get_real(c, VR_X);
+    }
+    CHECK(memcmp(x1, x2, sizeof x1) == 0, "a table's state replays other outputs");
+    /* forged: the table damaged, or the plan no longer the table's (checksums valid) */
+    FORGE(d.table.jerk[3] = NAN, "its table is invalid");
+    FORGE(d.table.jerk[0] = 1e300, "its table is invalid");
+    FORGE(d.table.samples[2] = 0, "its table is invalid");
+    FORGE(d.table.samples[2] = -7, "its table is invalid");
+    FORGE(d.table.n = DJL_MAX_TABLE + 1, "its table is invalid");
+    FORGE(d.table.n = -1, "its table is invalid");
+    FORGE(d.table.n = r.n - 1, "its table is invalid"); /* no longer at rest at its end */
+    /* (entries 0, 2, 3 and 5 hold a jerk, 1 and 4 none) */
+    FORGE(d.table.jerk[0] *= 1.0 + 1e-13, "its plan's steps are not those of its table");
+    FORGE(d.plan.step[3].A *= 1.0 + 1e-15, "its plan's steps are not those of its table");
+    FORGE(d.plan.step[4].N += 1, "its plan's steps are not those of its table");
+    FORGE(d.plan.step[2].stage = 3, "its plan's steps are not those of its table");
+    FORGE(d.plan.piece[5].j *= 1.0 + 1e-15, "its plan's pieces are not those of its table");
+    FORGE(d.plan.piece[6].k += 1, "its plan's pieces are not those of its table");
+    FORGE(d.plan.piece[r.n].x += 1e-9, "does not end where its table does");
+    FORGE(d.plan.n_steps = r.n - 1, "not the one of its table (counts)");
+    FORGE(d.jerk_source = JERK_SOURCE_F_MODE, "a table with jerk times from f_mode");
+    FORGE(d.p.distance += 1e-6, "not made from its parameters");
+    FORGE(d.plan.piece[7].v += 1e-7, "does not continue the one before");
+    /* refusals left the instance as it was */
+    CHECK(fmi2SetFMUstate(c, s2) == fmi2OK, "its own state again: %s", last_message);
+    fmi2FreeFMUstate(c, &s);
+    fmi2FreeFMUstate(c, &s2);
+    free(buf);
+    free(forged);
+    fmi2FreeInstance(c);
+
+    /* a stop, then an execute, mid-table: at rest within the limits; the execute on target */
+    for (i = 0; i < 2; i++) {
+        double vpk = 0.0, apk = 0.0, amin = 0.0, xs = 0.0;
+        c = make(i ? "table-execute" : "table-stop");
+        set_table(c, &r, x0, 0.0);
+        fmi2EnterInitializationMode(c);
+        CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "init: %s", last_message);
+        for (k = 0, t = 0.0; k < 3000; k++, t += Te) {
+            if (k == 83) {
+                xs = get_real(c, VR_X);
+                if (i) set_real(c, VR_TARGET, -0.05);
+                set_bool(c, i ? VR_EXECUTE : VR_STOP, 1);
+            }
+            CHECK(fmi2DoStep(c, t, Te, fmi2True) == fmi2OK, "step %d: %s", k, last_message);
+            vpk = fmax(vpk, fabs(get_real(c, VR_V)));
+            apk = fmax(apk, get_real(c, VR_A));
+            amin = fmin(amin, get_real(c, VR_A));
+        }
+        CHECK(get_bool(c, VR_DONE) && get_real(c, VR_V) == 0.0 && get_real(c, VR_A) == 0.0,
+              "%s: at rest", i ? "execute" : "stop");
+        CHECK(vpk <= r.V * (1 + 1e-9) && apk <= r.up * (1 + 1e-9) &&
+                  -amin <= fmax(r.up, r.down) * (1 + 1e-9),
+              "%s: within the limits: |v| %.17g / %.17g, a %.17g %.17g / %.17g %.17g",
+              i ? "execute" : "stop", vpk, r.V, apk, amin, r.up, r.down);
+        if (i)
+            CHECK(fabs(get_real(c, VR_X) + 0.05) <= 1e-12, "execute: on -0.05 m: %.17g",
+                  get_real(c, VR_X));
+        else
+            CHECK(get_real(c, VR_X) >= xs && get_real(c, VR_X) <= x0 + dist + 1e-12,
+                  "stop: rests at %.17g, between %.17g and %.17g", get_real(c, VR_X), xs,
+                  x0 + dist);
+        fmi2FreeInstance(c);
+    }
+
+    /* the planner of the other profiles refuses a table (it needs its table) */
+    {
+        static djl_plan pl;
+        djl_params q;
+        djl_error err;
+        djl_params_default(&q);
+        q.profile = DJL_PROFILE_TABLE;
+        q.distance = 0.0;
+        CHECK(djl_plan_motion(&q, &pl, &err) == DJL_E_PARAM && strcmp(err.param, "profile") == 0 &&
+                  strstr(err.message, "planned from its table") != NULL,
+              "djl_plan_motion of a table: %s", err.message);
+        CHECK(djl_table_validate(&q, &(djl_table){0}, &err) == DJL_OK, "an empty table at rest: %s",
+              err.message);
+        q.profile = DJL_PROFILE_DJL;
+        CHECK(djl_table_validate(&q, &(djl_table){0}, &err) == DJL_E_PARAM &&
+                  strstr(err.message, "profile = 4") != NULL,
+              "a table needs profile 4: %s", err.message);
+    }
+    /* bad tables: refused at initialisation naming the entry; usable after a reset */
+    {
+        static const struct {
+            int what; /* 0 table_n, 1 a length, 2 a jerk, 3 v_max, 4 distance */
+            double value;
+            const char *fragment;
+        } bad[] = {
+            {0, 257, "table_n = 257: must be 0..256"},
+            {0, -2, "table_n = -2"},
+            {1, 0, "table_samples[4] = 0: a piece of the table lasts 1..100000000 samples"},
+            {2, NAN, "table_jerk[4] = nan m/s3: must be finite"},
+            {2, 1e6, "table_jerk[4] = 1e+06 m/s3: beyond (a_max + d_max) / Te"},
+            {3, 0.5, "beyond v_max = "},
+            {4, 0.0, "distance = 0 m: the table ends"},
+        };
+        for (i = 0; i < (int)(sizeof bad / sizeof bad[0]); i++) {
+            fmi2ValueReference vr;
+            c = make("bad-table");
+            set_table(c, &r, 0.0, 0.0);
+            switch (bad[i].what) {
+            case 0: set_int(c, VR_TABLE_N, (int)bad[i].value); break;
+            case 1: set_int(c, VR_TABLE_SAMPLES + 3, (int)bad[i].value); break;
+            case 2:
+                vr = VR_TABLE_JERK + 3;
+                CHECK(fmi2SetReal(c, &vr, 1, &bad[i].value) == fmi2OK, "set");
+                break;
+            case 3: set_real(c, VR_V_MAX, r.V * bad[i].value); break;
+            default: set_real(c, VR_DISTANCE, bad[i].value); break;
+            }
+            fmi2EnterInitializationMode(c);
+            expect_error(fmi2ExitInitializationMode(c), bad[i].fragment);
+            CHECK(fmi2Reset(c) == fmi2OK, "reset");
+            CHECK(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) == fmi2OK, "setup");
+            set_table(c, &r, 0.0, 0.0);
+            fmi2EnterInitializationMode(c);
+            CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "the table after a reset: %s",
+                  last_message);
+            for (k = 0; k < 400; k++) fmi2DoStep(c, k * Te, Te, fmi2True);
+            CHECK(get_real(c, VR_X) == dist, "the table after a refusal lands: %.17g",
+                  get_real(c, VR_X));
+            fmi2FreeInstance(c);
+        }
+    }
+}
+
 int main(int argc, char **argv)
 {
     /* argv[1]: corruptions of a serialized state (10^6 for the full campaign of
@@ -1547,6 +1814,7 @@ int main(int argc, char **argv)
     run_issue21_long_stops();
     run_issue21_forged_plan();
     run_plan_consistency();
+    run_table();
     run_entry_points();
     run_state_fuzz(n_fuzz, n_sealed);
     printf("fmi2: %d failures, %d errors logged\n", failures, errors_logged);

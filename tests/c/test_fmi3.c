@@ -542,9 +542,67 @@ static void run_entry_points(void)
           "without a logger");
 }
 
+/* Profile 4 through FMI 3's arrays: table_samples (Int32[256]) and table_jerk
+ * (Float64[256]) set whole, read back; the table (+J, -J, -J, +J over 50 samples each:
+ * 0.025 m) lands exactly; an entry refused by name; an array of the wrong count refused
+ * without changing anything. */
+static void run_table(void)
+{
+    fmi3Instance c = make("table", 1);
+    fmi3ValueReference vp = VR_PROFILE, vn = VR_TABLE_N, vs = VR_TABLE_SAMPLES,
+                       vj = VR_TABLE_JERK, vd = VR_DISTANCE, vx = VR_X, vv = VR_V, vm = VR_V_MAX;
+    fmi3Int64 four = 4;
+    fmi3Int32 n = 4, samples[256], back_s[256];
+    double jerk[256] = {100.0, -100.0, -100.0, 100.0}, back_j[256], dist = 0.025, x = 0.0,
+           v = 1.0, t = 0.0, vmax = 0.2;
+    fmi3Boolean eh, term, early;
+    fmi3Float64 last;
+    int k;
+    for (k = 0; k < 256; k++) samples[k] = k < 4 ? 50 : 1;
+    CHECK(fmi3SetInt64(c, &vp, 1, &four, 1) == fmi3OK, "profile = 4: %s", last_message);
+    CHECK(fmi3SetInt32(c, &vn, 1, &n, 1) == fmi3OK, "table_n");
+    CHECK(fmi3SetInt32(c, &vs, 1, samples, 256) == fmi3OK, "table_samples");
+    CHECK(fmi3SetFloat64(c, &vj, 1, jerk, 256) == fmi3OK, "table_jerk");
+    CHECK(fmi3SetFloat64(c, &vd, 1, &dist, 1) == fmi3OK, "distance");
+    CHECK(fmi3GetInt32(c, &vs, 1, back_s, 256) == fmi3OK &&
+              memcmp(back_s, samples, sizeof samples) == 0,
+          "table_samples round trip");
+    CHECK(fmi3GetFloat64(c, &vj, 1, back_j, 256) == fmi3OK &&
+              memcmp(back_j, jerk, sizeof jerk) == 0,
+          "table_jerk round trip");
+    /* a count that is not the array's: refused, nothing set */
+    samples[0] = 0;
+    expect_error(fmi3SetInt32(c, &vs, 1, samples, 255), "nValues = 255");
+    CHECK(fmi3GetInt32(c, &vs, 1, back_s, 256) == fmi3OK && back_s[0] == 50, "nothing set");
+    /* v_max below the table's peak (0.25 m/s): refused naming the piece */
+    CHECK(fmi3SetFloat64(c, &vm, 1, &vmax, 1) == fmi3OK, "v_max");
+    CHECK(fmi3EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3False, 0.0) == fmi3OK, "enter");
+    expect_error(fmi3ExitInitializationMode(c), "table_jerk[2] = -100 m/s3 over table_samples[2] "
+                                                "= 50 samples: in piece 2 the table's velocity "
+                                                "reaches 0.25 m/s, beyond v_max = 0.2 m/s");
+    CHECK(fmi3Reset(c) == fmi3OK, "reset");
+    vmax = 0.25;
+    CHECK(fmi3SetInt64(c, &vp, 1, &four, 1) == fmi3OK && fmi3SetInt32(c, &vn, 1, &n, 1) == fmi3OK &&
+              fmi3SetFloat64(c, &vj, 1, jerk, 256) == fmi3OK &&
+              fmi3SetFloat64(c, &vd, 1, &dist, 1) == fmi3OK &&
+              fmi3SetFloat64(c, &vm, 1, &vmax, 1) == fmi3OK,
+          "set again");
+    samples[0] = 50;
+    CHECK(fmi3SetInt32(c, &vs, 1, samples, 256) == fmi3OK, "table_samples again");
+    CHECK(fmi3EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3False, 0.0) == fmi3OK, "enter");
+    CHECK(fmi3ExitInitializationMode(c) == fmi3OK, "exit: %s", last_message);
+    for (k = 0; k < 210; k++, t += 1e-3)
+        CHECK(fmi3DoStep(c, t, 1e-3, fmi3True, &eh, &term, &early, &last) == fmi3OK, "step");
+    fmi3GetFloat64(c, &vx, 1, &x, 1);
+    fmi3GetFloat64(c, &vv, 1, &v, 1);
+    CHECK(x == 0.025 && v == 0.0, "the table lands: x %.17g v %.17g", x, v);
+    fmi3FreeInstance(c);
+}
+
 int main(void)
 {
     run_shaper();
+    run_table();
     run_enumerations();
     run_multisegment_and_state();
     run_bad_inputs();

@@ -29,7 +29,7 @@ FLAGS="-std=c99 -g -O1 -Wall -Wextra -Wpedantic -Werror -Ifmu_src -I$FMI
        $CMP -fsanitize-coverage-ignorelist=tests/fuzz/coverage_ignore.txt
        -fsanitize-ignorelist=tests/fuzz/sanitize_ignore.txt"
 CORE="fmu_src/djl_validate.c fmu_src/djl_segment.c fmu_src/djl_motion.c fmu_src/djl_replan.c
-      fmu_src/djl_eval.c fmu_src/djl_shaper.c"
+      fmu_src/djl_eval.c fmu_src/djl_shaper.c fmu_src/djl_table.c"
 FMU="fmu_src/fmu_base.c fmu_src/fmu_model.c fmu_src/fmu_instance.c"
 # shellcheck disable=SC2086
 # fuzz_fmi hands the FMU's big blocks out from a pool (FUZZ_POOL, see fuzz_fmi.c): FMI 2's

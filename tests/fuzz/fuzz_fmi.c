@@ -6,7 +6,9 @@
  * wrong type) to any value, enter / exit initialisation, steps of any size from any
  * point, getters, FMU state get / set / free / serialise / deserialise (a copy, or a
  * forged one: a word changed and the checksum recomputed), reset, terminate, commands
- * (target + execute edge, stop edge, f_mode), debug logging.
+ * (target + execute edge, stop edge, f_mode), debug logging; and a whole table for
+ * profile 4 (bang-bang pieces that come back to rest, with the distance and limits they
+ * need, or a little off them: load_table).
  *
  * Invariants checked after every call (a broken one aborts):
  *  - every getter of an output, a calculated parameter or the time that answers OK gives
@@ -33,6 +35,11 @@
 #include <stdarg.h>
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+/* Variables of the table before issue 33 added table_n, table_samples, table_jerk last. */
+#define FUZZ_OLD_VARS 50
+typedef char fuzz_old_vars_check[(DJL_N_VARS == FUZZ_OLD_VARS + 3 &&
+                                   VR_TABLE_N == 65 && VR_TABLE_JERK == 2000) ? 1 : -1];
 
 /* ------------------------------------------------------------------ the two layers */
 
@@ -207,18 +214,32 @@ static int set_real(fmu *f, unsigned vr, double v)
     return (int)fmi2SetReal(f->c2, &vr, 1, &v);
 }
 
+/* An Enumeration variable (FMI 3 reads it as Int64, the other integers as Int32). */
+static int is_enumeration(unsigned vr)
+{
+    int i;
+    for (i = 0; i < DJL_N_VARS; i++)
+        if (djl_var_table[i].vr == vr) return djl_var_table[i].type == 'E';
+    return 0;
+}
+
 static int get_int(fmu *f, unsigned vr, long long *v)
 {
     int st;
     if (f->v3) {
-        fmi3Int64 x = 0;
-        st = (int)fmi3GetInt64(f->c3, &vr, 1, &x, 1);
-        if (st != 0) {
+        /* by the variable's type: an Int64 read of an Int32 variable is an error that puts
+         * the instance in the Error state (before issue 33 the harness tried Int64 first,
+         * and every FMI 3 run ended in Error at its first exit_init: parametric_end reads
+         * n_segments) */
+        if (is_enumeration(vr)) {
+            fmi3Int64 x = 0;
+            st = (int)fmi3GetInt64(f->c3, &vr, 1, &x, 1);
+            *v = x;
+        } else {
             fmi3Int32 y = 0;
             st = (int)fmi3GetInt32(f->c3, &vr, 1, &y, 1);
-            x = y;
+            *v = y;
         }
-        *v = x;
         return st;
     } else {
         fmi2Integer x = 0;
@@ -460,6 +481,79 @@ static void check_step(fmu *f, follow *w)
                w->scale);
 }
 
+/* A table for profile 4 (docs/generator.md, "Replayed tables"): P, bumps of +-J over n
+ * samples, a pause, and -+J over n (or, notched, over other lengths: the acceleration then
+ * does not come back to 0), then -P; the distance and the limits it needs, from the
+ * harness's own integration, or a little off them (refused by name); all 256 entries set,
+ * as arrays (FMI 3) or their elements (FMI 2).  The pieces' lengths and J from the bytes;
+ * Te the one the harness set (FMI 2 has no getters before initialisation). */
+static void load_table(fmu *f, fuzz_reader *r, double Te)
+{
+    static int32_t n[256];
+    static double jerk[256];
+    static fmi2ValueReference vr2[256];
+    uint8_t mode = rd_u8(r);
+    int bumps = 1 + rd_u8(r) % (mode & 1 ? 42 : 6), m = 0, i, st;
+    double J = rd_double(r), x = 0.0, v = 0.0, a = 0.0, V = 0.0, up = 0.0,
+           down = 0.0, off[4] = {1.0, 1.0 + 1e-6, 0.999, 10.0};
+    for (i = 0; i < 256; i++) {
+        n[i] = 1;
+        jerk[i] = 0.0;
+    }
+    for (i = 0; i < bumps && m + 3 <= 128; i++) {
+        double sg = rd_u8(r) & 1 ? -1.0 : 1.0;
+        n[m] = 1 + rd_u8(r);
+        jerk[m++] = sg * J;
+        n[m] = 1 + rd_u8(r);
+        jerk[m++] = 0.0;
+        n[m] = mode & 2 ? 1 + rd_u8(r) : n[m - 2];
+        jerk[m++] = -sg * J;
+    }
+    for (i = 0; i < m; i++) { /* -P */
+        n[m + i] = n[i];
+        jerk[m + i] = -jerk[i];
+    }
+    m *= 2;
+    if (mode & 4) n[rd_u8(r) % m] = (int32_t)(int8_t)rd_u8(r); /* an entry out of range */
+    for (i = 0; i < m; i++) {
+        double L = (double)n[i] * (isfinite(Te) ? Te : 1e-3), j = jerk[i];
+        double ts = j != 0.0 ? -a / j : -1.0;
+        if (ts > 0.0 && ts < L) V = fmax(V, fabs(v + ts * (a + 0.5 * ts * j)));
+        x += L * (v + L * (0.5 * a + L * j / 6.0));
+        v += L * (a + 0.5 * L * j);
+        a += j * L;
+        V = fmax(V, fabs(v));
+        up = fmax(up, a);
+        down = fmax(down, -a);
+    }
+    trace("load a table of %d pieces, J = %.17g: ends at x %.17g v %.17g a %.17g", m, J, x, v,
+          a);
+    (void)set_int(f, VR_PROFILE, PROFILE_TABLE, 0);
+    (void)set_int(f, VR_TABLE_N, m, 0);
+    if (f->v3) {
+        fmi3ValueReference vs = VR_TABLE_SAMPLES, vj = VR_TABLE_JERK;
+        st = (int)fmi3SetInt32(f->c3, &vs, 1, n, 256);
+        FUZZ_CHECK(st == 0 || st == 3, "fmi3SetInt32 of table_samples: %d", st);
+        (void)fmi3SetFloat64(f->c3, &vj, 1, jerk, 256);
+    } else {
+        for (i = 0; i < 256; i++) vr2[i] = VR_TABLE_SAMPLES + (fmi2ValueReference)i;
+        (void)fmi2SetInteger(f->c2, vr2, 256, n);
+        for (i = 0; i < 256; i++) vr2[i] = VR_TABLE_JERK + (fmi2ValueReference)i;
+        (void)fmi2SetReal(f->c2, vr2, 256, jerk);
+    }
+    if (mode & 8) {
+        x *= off[rd_u8(r) % 4];
+        (void)set_real(f, VR_X0, rd_double(r));
+    }
+    (void)set_real(f, VR_DISTANCE, x);
+    if (mode & 16) {
+        double k = off[rd_u8(r) % 4];
+        (void)set_real(f, VR_V_MAX, V > 0.0 ? V * k : 1.0);
+        (void)set_real(f, VR_A_MAX, (x < 0.0 ? down : up) > 0.0 ? (x < 0.0 ? down : up) * k : 1.0);
+        (void)set_real(f, VR_D_MAX, (x < 0.0 ? up : down) > 0.0 ? (x < 0.0 ? up : down) * k : 1.0);
+    }
+}
+
 /* Interesting step sizes: multiples and fractions of Te, and anything. */
 static double step_size(fuzz_reader *r, double Te)
 {
@@ -515,10 +609,19 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         uint8_t op = rd_u8(&r);
         switch (op % 16) {
         case 0: { /* set a variable of the table (any value, sometimes the wrong type) */
-            const djl_var_info *v = &djl_var_table[rd_u8(&r) % DJL_N_VARS];
+            /* the variables before issue 33's table (the first FUZZ_OLD_VARS) decode as
+             * they did, but from a byte of 250 up: the corpus keeps its meaning */
+            uint8_t b = rd_u8(&r);
+            const djl_var_info *v =
+                &djl_var_table[b < 250 ? b % FUZZ_OLD_VARS
+                                       : FUZZ_OLD_VARS + (b - 250) % (DJL_N_VARS - FUZZ_OLD_VARS)];
             unsigned vr = v->vr + (v->size > 1 ? rd_u8(&r) % v->size : 0);
             uint8_t how = rd_u8(&r);
             char type = how & 0x80 ? "RIBE"[how & 3] : v->type;
+            if (v->vr == VR_TABLE_JERK && (how & 0xa0) == 0x20) {
+                load_table(&f, &r, Te); /* a whole table */
+                break;
+            }
             if (type == 'R') st = set_real(&f, vr, rd_double(&r));
             else if (type == 'B') st = set_bool(&f, vr, rd_u8(&r) & 1);
             else st = set_int(&f, vr, (long long)(int8_t)rd_u8(&r), how & 0x40);
@@ -644,7 +747,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             FUZZ_CHECK(st == 0, "Reset returned %d", st);
             w.tracked = 0;
             w.stepping = 0;
-            Te = par(&f, VR_TE);
+            /* the start value: Reset restores it (a getter here, before issue 33, put every
+             * FMI 2 instance in the Error state: no getters before initialisation) */
+            Te = 1e-3;
             break;
         case 13:
             (void)terminate(&f);

@@ -3,10 +3,12 @@
  *
  * The first byte picks the input's meaning:
  *  - raw: the rest of the input is the serialised state, as is (any size);
- *  - forged: a state the FMU saved (one of six base scenarios: the default move at
+ *  - forged: a state the FMU saved (one of eight base scenarios: the default move at
  *    0.05 s, three segments, an input shaper timed by f_mode after a replan (both rings of
  *    its memory in use), jerk_source 3 after a replan, AL after a
- *    stop, a state saved before initialisation), patched by the input (bytes, 4- and
+ *    stop, a state saved before initialisation; and, since issue 33, a replayed table
+ *    (profile 4) mid-motion with a ZV shaper, and a table after a stop), patched by the
+ *    input (bytes, 4- and
  *    8-byte words, doubles from the table of fuzz_common.h; half of them within the plan
  *    and the values around it), then mostly sealed again with a valid checksum, as a
  *    forger would.
@@ -24,7 +26,7 @@
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-#define N_BASE 6
+#define N_BASE 8
 
 static void logger(fmi2ComponentEnvironment e, fmi2String n, fmi2Status s, fmi2String c,
                    fmi2String m, ...)
@@ -122,6 +124,24 @@ static void make_bases(void)
             set_real(c, VR_F_MODE, 9.0);
         } else if (i == 4) {
             set_int(c, VR_PROFILE, PROFILE_AL);
+        } else if (i >= 6) { /* a table: +J, 0, -J, -J, 0, +J (J = 200 m/s3): 6.656 mm */
+            static const int n[6] = {20, 12, 20, 20, 12, 20};
+            static const double j[6] = {200.0, 0.0, -200.0, -200.0, 0.0, 200.0};
+            int q;
+            set_int(c, VR_PROFILE, PROFILE_TABLE);
+            set_int(c, VR_TABLE_N, 6);
+            for (q = 0; q < 6; q++) {
+                set_int(c, VR_TABLE_SAMPLES + (fmi2ValueReference)q, n[q]);
+                set_real(c, VR_TABLE_JERK + (fmi2ValueReference)q, j[q]);
+            }
+            set_real(c, VR_DISTANCE, 0.006656);
+            set_real(c, VR_V_MAX, 0.5);
+            set_real(c, VR_A_MAX, 4.1);
+            set_real(c, VR_D_MAX, 4.1);
+            if (i == 6) {
+                set_int(c, VR_SHAPER, SHAPER_ZV);
+                set_real(c, VR_F_SHAPER, 25.0);
+            }
         }
         if (i == 5) { /* saved before initialisation */
             save(c, &base[i], &base_size[i]);
@@ -130,7 +150,7 @@ static void make_bases(void)
         }
         FUZZ_CHECK(fmi2EnterInitializationMode(c) == fmi2OK, "enter");
         FUZZ_CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit");
-        steps(c, i == 0 ? 50 : 120, 1e-3);
+        steps(c, i == 0 ? 50 : i >= 6 ? 30 : 120, 1e-3);
         if (i == 2) { /* a replan: the shaper keeps the past of the plan it replaces */
             set_real(c, VR_F_MODE, 12.0);
             set_real(c, VR_TARGET, 0.2);
@@ -141,7 +161,7 @@ static void make_bases(void)
             set_real(c, VR_TARGET, -0.1);
             set_bool(c, VR_EXECUTE, 1);
             steps(c, 40, 1e-3);
-        } else if (i == 4) {
+        } else if (i == 4 || i == 7) {
             set_bool(c, VR_STOP, 1);
             steps(c, 3, 1e-3);
         }
@@ -225,7 +245,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     r.n = size;
     r.i = 0;
     mode = rd_u8(&r);
-    which = rd_u8(&r) % N_BASE;
+    /* the six bases before issue 33 as they were decoded (the corpus keeps its meaning),
+     * the table's from a byte of 252 up */
+    which = rd_u8(&r);
+    which = which >= 252 ? 6 + which % 2 : which % 6;
     if (mode % 8 == 0) {
         accepted = fmi2DeSerializeFMUstate(inst, (const fmi2Byte *)data + 2,
                                            size >= 2 ? size - 2 : 0, &s) == fmi2OK;
