@@ -70,13 +70,14 @@ from . import __version__
 from .degradation import Degradation
 from .files import write_text
 from .fmu.build import cache_dir
-from .peers.motion_axis import cosimulate_reference, reference_map_error_residuals
+from .peers.motion_axis import cosimulate_reference
 from .peers.shapers import base_motion, shape
 from .peers.trajectory import PiecewiseJerk
 from .plant import free_amplitude
 from .scenario import Scenario
 from .scoring import score_points, score_uncertainty
 from .shaper_designs import ei, si_shaper, zv, zvd
+from .simulation.jerk_table import JerkTable
 from .simulation.session import Session
 from .simulation.shaped_axis import ShaperSpec
 from .tuning.graceful import (
@@ -103,7 +104,7 @@ from .tuning.tune import tune_profile
 from .uncertainty import Perturbation, UncertaintySpec, level
 
 __all__ = ["ASSUMED", "FAMILIES", "RULE", "Candidate", "Recommendation", "candidate_parameters",
-           "recommend", "reference_motion", "table_of", "SampledReference"]
+           "jerk_table", "recommend", "reference_motion", "table_of", "SampledReference"]
 
 FAMILIES = ("DJL (robust)", "JL*shaper", "DJL*shaper", "LP reference")
 """The families the recommendation chooses from."""
@@ -294,10 +295,8 @@ class Recommendation:
                             errors: Sequence[float] | np.ndarray) -> np.ndarray:
         """Return the recommended profile's residual (m) for each map error e (f → f·(1 + e))."""
         b = self.best
-        if b.profile == "table":
-            return reference_map_error_residuals(
-                sc, session, reference_motion(sc, session, np.array(b.jerk)), errors)
-        return session.map_error_residuals(sc, b.profile, b.T_F, errors, shaper=b.shaper)
+        return session.map_error_residuals(sc, b.profile, b.T_F, errors, shaper=b.shaper,
+                                           table=jerk_table(sc, b))
 
     def fmu_parameters_json(self, sc: Scenario) -> str:
         """:meth:`fmu_parameters` as a JSON object (what a CSV row carries)."""
@@ -392,28 +391,23 @@ def table_of(jerk: Sequence[float]) -> tuple[list[int], list[float]]:
     return [int(n) for n in lengths], [float(x) for x in j[starts]]
 
 
+def jerk_table(sc: Scenario, c: Candidate) -> JerkTable | None:
+    """Return a sampled reference's table (None for a candidate of another profile)."""
+    if c.profile != "table":
+        return None
+    return JerkTable.from_jerk_samples(np.asarray(c.jerk), sc.simulation.Te)
+
+
 def candidate_parameters(sc: Scenario, c: Candidate) -> dict[str, Any]:
     """Return the generator FMU's parameters that produce a candidate (excited axis)."""
-    if c.profile == "table":
-        p = Session.move_params(sc, "AL")
-        samples, jerk = table_of(c.jerk)
-        p.update({"profile": TABLE_PROFILE, "table_n": len(samples), "table_samples": samples,
-                  "table_jerk": jerk})
-        return p
-    p = Session.move_params(sc, c.profile, c.T_F)
-    if c.shaper is not None:
-        p.update(c.shaper.fmu_parameters(sc.simulation.Te))
-    return p
+    return Session.move_params(sc, c.profile, c.T_F, c.shaper, jerk_table(sc, c))
 
 
 def _run(sc: Scenario, session: Session, c: Candidate, t_stop: float | None = None
          ):  # -> CoSimResult
-    """Co-simulate a candidate (its generator profile, or its sampled reference)."""
-    if c.profile == "table":
-        return cosimulate_reference(sc, session, reference_motion(sc, session,
-                                                                  np.array(c.jerk)),
-                                    "recommended", t_stop=t_stop)
-    return session.run(sc, c.profile, c.T_F, t_stop=t_stop, shaper=c.shaper)
+    """Co-simulate a candidate: the generator makes its profile (shaped, or a table)."""
+    return session.run(sc, c.profile, c.T_F, t_stop=t_stop, shaper=c.shaper,
+                       table=jerk_table(sc, c))
 
 
 def _measure(sc: Scenario, session: Session, family: str, profile: str,
@@ -452,13 +446,21 @@ TABLE_PROFILE = 4
 
 REFERENCE_SPANS = (0.6, 1.0, 1.5)
 """Spans of the LP reference's filters, in end-mode periods: the next one while a span has no
-design, or its design settles (in the programme) more than 5 % after JL's motion time."""
+design, or (up to 1 period) its design settles, in the programme, more than 5 % after JL's
+motion time."""
 
 REFERENCE_PIECE = 0.5
 """The LP reference filters each half jerk time of JL's ramps on its own."""
 
 REFERENCE_STRIDE = 6
-"""The delays (samples apart) the LP reference's filters may use."""
+"""The delays (samples apart) the LP reference's filters may use, at least."""
+
+REFERENCE_DELAYS = 25
+"""About this many delays a period of the end mode (a slow mode: delays further apart)."""
+
+REFERENCE_SOLVES = 120
+"""Programmes a design may solve: past them, the earliest settling found so far is kept (a
+count, not a time: the recommendation is the same on any machine)."""
 
 
 def _check_points(spec: UncertaintySpec) -> list[Perturbation]:
@@ -484,20 +486,21 @@ def _design_one(sc: Scenario, session: Session, T_F: tuple[float, ...], band: fl
     """Design the LP reference of one span on a set (the window past the motion if needed)."""
     obj = RampObjective(sc, session, T_F, tuple(pts), band, piece=REFERENCE_PIECE)
     D = max(2, int(round(frac * obj.period / obj.Te)))
-    st = REFERENCE_STRIDE
+    # about REFERENCE_DELAYS delays a period, at least REFERENCE_STRIDE samples apart
+    st = max(REFERENCE_STRIDE, int(round(obj.period / obj.Te / REFERENCE_DELAYS)))
     m_a, d_a = np.array(mm), np.array(dl)
     for after in (0.0, 0.5 * obj.period, 2.0 * obj.period):
         r = design_reference(obj, D, deadlines=d_a, minimax=m_a, quiet=quiet, after=after,
-                             stride=st)
-        budget = TABLE_PIECES // 2
-        while r is not None and pieces(r.jerk) > TABLE_PIECES and budget >= obj.G:
-            budget = int(budget * 0.75)  # fewer amplitudes: fewer pieces
-            r2 = design_reference(obj, D, deadlines=d_a, minimax=m_a, quiet=quiet,
-                                  after=after, stride=st, support=sparse_support(r, budget))
-            if r2 is None:
-                notes.append(f"an LP reference of {frac:g} period had {pieces(r.jerk)} "
-                             f"pieces, more than the FMU's table holds ({TABLE_PIECES})")
-            r = r2
+                             stride=st, max_solves=REFERENCE_SOLVES)
+        if r is not None and pieces(r.jerk) > TABLE_PIECES:  # fewer amplitudes, once
+            n_too = pieces(r.jerk)
+            r = design_reference(obj, D, deadlines=d_a, minimax=m_a, quiet=quiet,
+                                 after=after, stride=st, max_solves=REFERENCE_SOLVES,
+                                 support=sparse_support(r, TABLE_PIECES // 3))
+            if r is None or pieces(r.jerk) > TABLE_PIECES:
+                notes.append(f"an LP reference of {frac:g} period had {n_too} pieces, more "
+                             f"than the FMU's table holds ({TABLE_PIECES})")
+                r = None
         if r is not None:
             late = f", settling up to {after:.2f} s after" if after else ""
             return r, f"LP, graceful beyond the stated set, {frac:g} period{late}", obj
@@ -562,8 +565,10 @@ def _reference_designs(sc: Scenario, session: Session, T_F: tuple[float, ...], b
             r, _, obj = got
             out.append((r, got[1]))
             # a longer span only where this one settles more than 5 % after JL's motion
-            # time (the constraints bind: a longer span frees them)
-            if r.settle_sample * obj.Te - sc.move.t_start <= 1.05 * obj.T_base:
+            # time (the constraints bind: a longer span frees them), and not past 1 period
+            # once a design is found (a longer one costs several times more)
+            if r.settle_sample * obj.Te - sc.move.t_start <= 1.05 * obj.T_base \
+                    or frac >= 1.0:
                 break
     if not out:
         notes.append("no LP reference of " + "/".join(f"{f:g}" for f in REFERENCE_SPANS)
@@ -669,15 +674,16 @@ def _quiet_of(c: Candidate, sc: Scenario, session: Session, band: float,
             quiets[("JL", T_jl)] = assumed.quiet(sc, session, T_jl, band)
         bound = quiets[("JL", T_jl)].bound
         scq = assumed.scenario(sc)
-        mot = reference_motion(sc, session, np.array(c.jerk))
         amps = []
         for p in assumed.points(sc.uncertainty):
             modes = tuple(dataclasses.replace(m, mass_ratio=m.mass_ratio / (1.0 + p.scale) ** 2)
                           for m in scq.modemap.modes)
             scp = dataclasses.replace(scq, modemap=dataclasses.replace(scq.modemap,
                                                                          modes=modes))
-            t_stop = sc.move.t_start + mot.motion_time + 2 * sc.simulation.step
-            run = cosimulate_reference(scp, session, mot, "quiet", t_stop=t_stop)
+            table = jerk_table(sc, c)
+            t_stop = session.t_stop_after_motion(scp, "table", c.T_F, table=table) \
+                + sc.simulation.step
+            run = session.run(scp, "table", c.T_F, t_stop=t_stop, table=table)
             amps += [free_amplitude(e, de, m) for (e, de), m in zip(run.state_end,
                                                                      run.modes_end, strict=True)]
         return float(np.max(np.array(amps) / bound))
@@ -878,7 +884,9 @@ def recommend(sc: Scenario, session: Session, band: float, *,
         run = _run(sc, fast, c)
         curve = ys.curve(ys.score(run, sc, band))
         c.curves = {k: [float(x) for x in v] for k, v in curve.items()}
-        r = {k: np.asarray(curve[k]) / ys.best[k] for k in curve}
+        with np.errstate(invalid="ignore", divide="ignore"):  # both never settle: a tie
+            r = {k: np.where(np.asarray(curve[k]) == ys.best[k], 1.0,
+                             np.asarray(curve[k]) / ys.best[k]) for k in curve}
         k_worst = max(r, key=lambda k: float(np.max(r[k])))
         i = int(np.argmax(r[k_worst]))
         c.excess = float(r[k_worst][i])
@@ -925,15 +933,26 @@ def recommend(sc: Scenario, session: Session, band: float, *,
         ok = sorted(scored, key=lambda c: c.quiet)[:1]
         notes.append(f"no candidate keeps the assumed unmodelled modes quiet; the quietest "
                      f"({ok[0].quiet:.2f} x its bound) was kept")
-    graceful = [c for c in ok if c.excess <= 1.0 + GRACE]
+    def excess(c: Candidate) -> float:
+        return c.excess if math.isfinite(c.excess) else math.inf
+
+    def order(c: Candidate) -> tuple[float, float]:
+        t = c.settling_worst
+        return (t if math.isfinite(t) else math.inf, c.motion_time)
+
+    graceful = [c for c in ok if excess(c) <= 1.0 + GRACE]
     if graceful:
-        pick = min(graceful, key=lambda c: (c.settling_worst, c.motion_time))
+        pick = min(graceful, key=order)
     else:  # the trade-off: the least excess, then the stated width
-        e_min = min(c.excess for c in ok)
-        pick = min((c for c in ok if c.excess <= e_min * (1.0 + TIE)),
-                   key=lambda c: (c.settling_worst, c.motion_time))
+        e_min = min((excess(c) for c in ok), default=math.inf)
+        pool = [c for c in ok if excess(c) <= e_min * (1.0 + TIE)] if math.isfinite(e_min) \
+            else (ok or cands)
+        pick = min(pool, key=order)
         notes.append(f"no candidate is as good as the best textbook shaper at every width: "
-                     f"the least excess, {100 * (e_min - 1):.1f} %, bound the choice")
+                     f"the least excess, {100 * (e_min - 1):.1f} %, bound the choice"
+                     if math.isfinite(e_min) else
+                     "no candidate could be compared with the textbook shapers at every width "
+                     "(they never settle): the least worst case of the stated uncertainty")
     rest = sorted((c for c in cands if c is not pick),
                   key=lambda c: (c.settling_worst if math.isfinite(c.settling_worst)
                                  else math.inf, c.motion_time))

@@ -48,8 +48,16 @@ def test_run_writes_table_csv_and_plot(tmp_path, capsys, fmu2):
     # a progress line on stderr as the scenario finishes
     assert "simulate: cli-test (one move) done in " in captured.err
     assert sorted(p.name for p in out.iterdir()) == [
-        "cli-test-robustness.csv", "cli-test-robustness.png", "cli-test-signals.csv",
-        "cli-test.csv", "cli-test.png", "summary.txt"]
+        "cli-test-degradation.csv", "cli-test-degradation.png", "cli-test-robustness.csv",
+        "cli-test-robustness.png", "cli-test-signals.csv", "cli-test.csv", "cli-test.png",
+        "summary.txt"]
+    # the recommended profile's and the textbook shapers' worst case at every width (issue 33)
+    deg = list(csv.DictReader((out / "cli-test-degradation.csv").open()))
+    methods = {r["method"] for r in deg}
+    assert methods == {"recommended", "JL*ZV", "JL*ZVD", "JL*EI", "JL*SI"}
+    widths = sorted({float(r["width"]) for r in deg})
+    assert widths[0] == 0.0 and widths[-1] == pytest.approx(2.0) and len(widths) == 81
+    assert "Wider than stated (map scale)" in text and "Why the recommended profile" in text
     rows = list(csv.DictReader((out / "cli-test.csv").open()))
     # the robustness curves pass through the nominal residual at e = 0 and their worst case
     # over +/-10 % is the CSV's

@@ -364,8 +364,8 @@ def _commands(tmp_path: Path) -> dict[str, tuple[list[str], Path, list[str]]]:
     o = tmp_path / "out"
     return {
         "simulate": (["simulate", str(scen), "-o", str(o), "-q"], o,
-                     ["s.csv", "s-signals.csv", "s-robustness.csv", "s.png",
-                      "s-robustness.png", "summary.txt"]),
+                     ["s.csv", "s-signals.csv", "s-robustness.csv", "s-degradation.csv",
+                      "s.png", "s-robustness.png", "s-degradation.png", "summary.txt"]),
         "map": (["map", str(scen), "-o", str(o), "-q", "--workers", "1", "--engine", "fmu"],
                 o, ["s-map.csv", "s-map.png", "s-map-DJL-residual.png",
                     "s-map-JL-residual.png", "s-map-djl-vs-jl-settling.png", "summary.txt"]),
@@ -373,8 +373,9 @@ def _commands(tmp_path: Path) -> dict[str, tuple[list[str], Path, list[str]]]:
                  ["s-jerk-times.csv", "summary.txt"]),
         "compare": (["compare", "X", "--peers", "AL*ZV", "--no-tuned-djl", "--timeopt", "0",
                      "--no-stationary", "--no-bound", "-o", str(o), "-q"], o,
-                    ["X.csv", "X-map-error.csv", "X-robustness.csv", "X-map-error.png",
-                     "X-robustness.png", "X-runs.png", "summary.txt"]),
+                    ["X.csv", "X-map-error.csv", "X-robustness.csv", "X-degradation.csv",
+                     "X-map-error.png", "X-robustness.png", "X-degradation.png", "X-runs.png",
+                     "summary.txt"]),
         "report": (["report", "--fast", "--claims", "1", "--figures-beside", "-o",
                     str(o / "r.html")], o, ["r.html", "r_files/claim1_1.png"]),
         "demo": (["demo", "--out", str(o)], o,

@@ -286,7 +286,8 @@ def test_cli_writes_outputs(tmp_path, fmu2, monkeypatch):
                str(fmu2), "--no-tuned-djl"])
     assert rc == 0
     names = sorted(p.name for p in out.iterdir())
-    assert names == ["small-map-error.csv", "small-robustness.csv", "small.csv", "summary.txt"]
+    assert names == ["small-degradation.csv", "small-map-error.csv", "small-robustness.csv",
+                     "small.csv", "summary.txt"]
     text = (out / "summary.txt").read_text()
     assert "AL*ZV" in text and "damped jerk" in text and "AL*ZVD" not in text
     assert "JL*ZV" in text and "JL*TV-ZV" in text and "DJL (optimal)" not in text
@@ -332,7 +333,8 @@ def test_cli_tuned_djl_rows(tmp_path, fmu2):
     else:
         assert "DJL (optimal), DJL (robust): skipped" in text
     names = {p.name for p in out.iterdir()}
-    assert {"small-map-error.png", "small-robustness.png", "small-runs.png"} <= names
+    assert {"small-map-error.png", "small-robustness.png", "small-runs.png",
+            "small-degradation.png", "small-degradation.csv"} <= names
 
 
 @pytest.mark.parametrize("argv,msg", [

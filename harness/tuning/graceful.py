@@ -380,4 +380,4 @@ class UnmodelledModes:
         return (f"any mode at {self.ratio[0]:g}-{self.ratio[1]:g}x the highest modelled one "
                 f"(following z, zeta >= {self.zeta:g}, gain up to {self.gain:g} of it) is left a "
                 f"residual no larger than the least JL or a textbook shaper leaves it, or than "
-                f"{100 * self.floor:g} % of the band")
+                f"{self.floor:g} band")

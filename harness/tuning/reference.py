@@ -46,6 +46,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..compiled import engine as _compiled_engine
+from ..fmu import spec
 from ..lp import DualIncrementalLP, IncrementalLP
 from ..plant import hermite_mid, transitions
 from ..scenario import Scenario
@@ -58,7 +59,10 @@ __all__ = ["TABLE_PIECES", "RampObjective", "ReferenceDesign", "design_reference
 _POLYGON = 16
 """Sides of the polygon inside which a residual's phasor is kept (an inner approximation)."""
 
-TABLE_PIECES = 256
+LIMIT_MARGIN = 1e-7
+"""The designs keep the acceleration and velocity limits this much (relative) inside."""
+
+TABLE_PIECES = spec.MAX_TABLE
 """Most pieces of constant jerk a design may have: what the generator FMU's table holds."""
 
 
@@ -382,7 +386,8 @@ def design_reference(obj: RampObjective, D: int, *, target: float = 0.95,
                      quiet: tuple[RampObjective, np.ndarray] | None = None,
                      after: float = 0.0, step: int = 4, stride: int = 1,
                      support: np.ndarray | list[np.ndarray] | None = None,
-                     dual: bool = True, per_round: int = 48) -> ReferenceDesign | None:
+                     dual: bool = True, per_round: int = 48,
+                     max_solves: int | None = None) -> ReferenceDesign | None:
     """Design the reference of span D that settles first at the ``minimax`` points.
 
     Parameters
@@ -416,6 +421,10 @@ def design_reference(obj: RampObjective, D: int, *, target: float = 0.95,
         every piece, or one per piece); default every one computed.
     per_round : int
         Most rows of one kind added per round (the rows a solution breaks).
+    max_solves : int, optional
+        Programmes the search for the earliest sample may solve: past them, the
+        earliest feasible sample found so far is kept (and a note says so).  A count,
+        not a time: the design is the same on any machine.
     dual : bool
         Solve the programmes through their duals (:class:`harness.lp.DualIncrementalLP`:
         few variables, many rows); False: as they are.
@@ -537,8 +546,14 @@ def design_reference(obj: RampObjective, D: int, *, target: float = 0.95,
         if k_p <= sp.k_hi:
             i0 = max(k_p, W0) - W0
             family(c_E[p, i0:] / (band * target), M_E[p, i0:] / (band * target), 0.0, -1.0, 1.0)
-    lo_a, hi_a = (-mv.d_max, mv.a_max) if sgn > 0 else (-mv.a_max, mv.d_max)
-    lo_v, hi_v = (0.0, mv.v_max) if sgn > 0 else (-mv.v_max, 0.0)
+    # the limits, a little inside (the solver meets its rows to its tolerances; the
+    # generator replays a table within its limits to 1e-10); the velocity is kept at the
+    # samples, and between two it can exceed both by j_max Te^2 / 8 (a turning inside)
+    k_in = 1.0 - LIMIT_MARGIN
+    lo_a, hi_a = (-mv.d_max * k_in, mv.a_max * k_in) if sgn > 0 else (-mv.a_max * k_in,
+                                                                        mv.d_max * k_in)
+    v_in = mv.v_max * k_in - obj.j_max * obj.Te ** 2 / 8.0
+    lo_v, hi_v = (0.0, v_in) if sgn > 0 else (-v_in, 0.0)
     for Q, low, high in ((sp.j, -obj.j_max, obj.j_max), (sp.a, lo_a, hi_a), (sp.v, lo_v, hi_v)):
         scale = max(abs(low), abs(high))
         c_q, M_q = on(Q)
@@ -559,28 +574,41 @@ def design_reference(obj: RampObjective, D: int, *, target: float = 0.95,
             if not lp.solve():
                 return False
             x, t = lp.x[:n], lp.x[n]
-            added = False
+            # every broken row of every family, then the worst of them (relative to their
+            # scale) -- the most per family, and the most overall -- added at once
+            found: list[tuple[float, int, int, tuple[int, int]]] = []
             for f, (M, tau, lo, hi) in enumerate(fams):
                 val = M @ x - tau * t
                 over = np.maximum(val - hi, lo - val)
                 scale = np.maximum(1.0, np.maximum(np.abs(np.where(np.isfinite(lo), lo, 0.0)),
                                                    np.abs(np.where(np.isfinite(hi), hi, 0.0))))
-                bad = np.flatnonzero(over > 1e-9 * scale)
-                if f < n_fixed:
-                    keys = [(f, int(i)) for i in bad]
-                else:  # a window row: its sign, point and absolute sample
-                    w_len = n_win // n_mm
-                    keys = [(n_fixed + (i >= n_win), int(i % n_win // w_len) * 1_000_000
-                             + m + int(i % n_win % w_len)) for i in bad]
-                fresh = [j for j, k in enumerate(keys) if k not in kept]
-                if fresh:
-                    sel = bad[fresh]
-                    order = np.argsort(-over[sel])[:per_round]
-                    worst = sel[order]
-                    kept.update(keys[fresh[j]] for j in order)
-                    lp.add(np.hstack([M[worst], np.full((worst.size, 1), -tau)]), lo[worst],
-                           hi[worst])
-                    added = True
+                rel = over / scale
+                bad = np.flatnonzero(rel > 1e-9)
+                if not bad.size:
+                    continue
+                bad = bad[np.argsort(-rel[bad])]
+                picked = 0
+                for i in bad.tolist():
+                    if f < n_fixed:
+                        key = (f, i)
+                    else:  # a window row: its sign, point and absolute sample
+                        w_len = n_win // n_mm
+                        key = (n_fixed + (i >= n_win), (i % n_win // w_len) * 1_000_000
+                               + m + i % n_win % w_len)
+                    if key in kept:
+                        continue
+                    found.append((float(rel[i]), f, i, key))
+                    picked += 1
+                    if picked >= per_round:
+                        break
+            found.sort(key=lambda r: -r[0])
+            found = found[:4 * per_round]
+            added = bool(found)
+            for f in sorted({r[1] for r in found}):
+                M, tau, lo, hi = fams[f]
+                idx = np.array([r[2] for r in found if r[1] == f])
+                kept.update(r[3] for r in found if r[1] == f)
+                lp.add(np.hstack([M[idx], np.full((idx.size, 1), -tau)]), lo[idx], hi[idx])
             if not added:
                 return True
 
@@ -597,6 +625,10 @@ def design_reference(obj: RampObjective, D: int, *, target: float = 0.95,
     guess = min(max(obj.k0 + obj.n_base, sp.k_w + 1), good - 1)
     lt = math.log(target)
     while good - below > 1:
+        if max_solves is not None and lp.solves >= max_solves:
+            notes.append(f"stopped after {lp.solves} programmes: the settling sample is "
+                         f"within [{below + 1}, {good}]")
+            break
         m = guess if guess is not None else (good + below) // 2
         guess = None
         first, snap = lp.mark(), set(kept)
