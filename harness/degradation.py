@@ -205,7 +205,7 @@ def degradation(sc: Scenario, runs: Mapping[str, CoSimResult], band: float, *,
     -------
     Degradation
     """
-    sweeps = width_sweeps(sc.uncertainty, top)
+    sweeps = width_sweeps(sc.uncertainty, top, box_levels=4)
     n = max(2, int(round(40 * top)))
     widths = np.linspace(0.0, top, n + 1)
     curves: dict[str, dict[str, np.ndarray]] = {}

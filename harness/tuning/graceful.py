@@ -91,8 +91,9 @@ def design_points(spec: UncertaintySpec, tuning: Sequence[Perturbation],
                   levels: Sequence[float] = OUTER_LEVELS) -> tuple[Perturbation, ...]:
     """Return the points a graceful design is held at: the tuning set, then wider ones.
 
-    Each stated kind alone at ``levels`` times its range (both sides), and with
-    two kinds or more the corners of the box at the widest two levels.
+    Each stated kind alone at ``levels`` times its range (both sides; the
+    kinds other than the map scale at every second level), and with two kinds or
+    more the corners of the box at the widest level.
     """
     pts: list[Perturbation] = list(tuning)
     on = [k for k, v in spec.active.items() if v]
@@ -100,7 +101,7 @@ def design_points(spec: UncertaintySpec, tuning: Sequence[Perturbation],
                 "damping": "damping"}
     lo, hi = spec.damping
     for kind in on:
-        for s in levels:
+        for s in (levels if kind == "map_scale" else levels[1::2]):
             if kind == "damping":
                 ends = (lo ** s, hi ** s)
             else:
@@ -111,7 +112,7 @@ def design_points(spec: UncertaintySpec, tuning: Sequence[Perturbation],
                 if p not in pts:
                     pts.append(p)
     if len(on) > 1:
-        for s in levels[-2:]:
+        for s in levels[-1:]:
             axes = []
             for kind in on:
                 if kind == "damping":
@@ -211,7 +212,7 @@ class Yardstick:
             which the generator's whole-sample shaper rounds.  Then ``shapers``
             is not used.
         """
-        sweeps = width_sweeps(sc.uncertainty, top)
+        sweeps = width_sweeps(sc.uncertainty, top, box_levels=4)
         n = max(2, int(round(40 * top)))
         widths = np.linspace(0.0, top, n + 1)
         ys = cls(sc.uncertainty, sweeps, widths, {})
