@@ -27,6 +27,7 @@ import math
 import os
 import platform
 import statistics
+import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
 
@@ -66,11 +67,22 @@ def main() -> None:
     print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores; "
           f"class: {DEFAULT_CLASS.describe()}; seed {args.seed}, {args.n} machines")
     t0 = time.perf_counter()
+    rows = []
+
+    def progress(r: dict[str, object]) -> None:
+        print(f"  [{len(rows)}/{args.n}] {r['name']}: recommended / limit "
+              f"{float(r['rec']) / float(r['limit']):.3f}, {float(r['wall']):.0f} s",
+              file=sys.stderr, flush=True)
+
     if args.workers > 1:
         with ProcessPoolExecutor(args.workers) as ex:
-            rows = list(ex.map(one, [args.seed] * args.n, range(args.n)))
+            for r in ex.map(one, [args.seed] * args.n, range(args.n)):
+                rows.append(r)
+                progress(r)
     else:
-        rows = [one(args.seed, i) for i in range(args.n)]
+        for i in range(args.n):
+            rows.append(one(args.seed, i))
+            progress(rows[-1])
     print(f"{'machine':>9} {'limit':>7} {'rec':>7} {'/limit':>7} {'best peer':>14} "
           f"{'peer':>7} {'/limit':>7} {'first':>6}  family (design), design time")
     for r in rows:

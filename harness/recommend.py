@@ -546,8 +546,8 @@ def _reference_designs(sc: Scenario, session: Session, T_F: tuple[float, ...], b
             if got is None or not checks:
                 break
             r, _, obj = got
-            run = cosimulate_reference(sc, session, reference_motion(sc, session, r.jerk),
-                                       "check")
+            run = session.run(sc, "table", T_F,
+                              table=JerkTable.from_jerk_samples(r.jerk, sc.simulation.Te))
             t_c = score_points(run, sc, band, checks).settling
             claim = r.settle_sample * obj.Te - sc.move.t_start
             lim = np.array([claim + obj.Te if level(spec, p) <= 1.0 + 1e-9

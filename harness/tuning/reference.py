@@ -574,6 +574,8 @@ def design_reference(obj: RampObjective, D: int, *, target: float = 0.95,
             if not lp.solve():
                 return False
             x, t = lp.x[:n], lp.x[n]
+            if t > target:  # rows only add: t is already a lower bound past the target
+                return True
             # every broken row of every family, then the worst of them (relative to their
             # scale) -- the most per family, and the most overall -- added at once
             found: list[tuple[float, int, int, tuple[int, int]]] = []
