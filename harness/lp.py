@@ -86,6 +86,7 @@ class IncrementalLP:
         self.h.changeColsCost(self.n, np.arange(self.n, dtype=np.int32),
                               np.asarray(cost, dtype=float))
         self.rows = 0
+        self._ids = np.zeros(0, dtype=np.int64)  # each model row's index (rows pruned leave gaps)
         self.x = np.zeros(self.n)
         self.value = np.inf
         self.iterations = 0
@@ -109,6 +110,7 @@ class IncrementalLP:
         self.h.addRows(k, lo, up, int(rr.size), starts, cc.astype(np.int32), M[rr, cc])
         first = self.rows
         self.rows += k
+        self._ids = np.r_[self._ids, np.arange(first, self.rows)]
         return first, self.rows
 
     def mark(self) -> tuple[int, object]:
@@ -125,9 +127,33 @@ class IncrementalLP:
     def drop_from(self, first: int) -> None:
         """Remove every row from index ``first`` on (the blocks added last)."""
         if first < self.rows:
-            idx = np.arange(first, self.rows, dtype=np.int32)
-            self.h.deleteRows(int(idx.size), idx)
+            idx = np.flatnonzero(self._ids >= first).astype(np.int32)
+            if idx.size:
+                self.h.deleteRows(int(idx.size), idx)
+            self._ids = self._ids[self._ids < first]
             self.rows = first
+
+    def prune(self, since: int = 0) -> np.ndarray:
+        """Remove the rows (index ``since`` on) the last solution does not bind; return their indices.
+
+        A row whose slack is basic holds no weight in the optimum: removing it
+        keeps the optimum and the basis, and makes the next solves cheaper.
+        Rows keep their indices (:meth:`drop_from` still works); a row removed
+        may be added again.  Prune only after a solve, and not between a
+        :meth:`mark` and its :meth:`restore`.
+        """
+        basis = self.h.getBasis()
+        if not getattr(basis, "valid", False) or not self._ids.size:
+            return np.zeros(0, dtype=np.int64)
+        basic = self._hs.HighsBasisStatus.kBasic
+        slack = np.fromiter((st == basic for st in basis.row_status), bool,
+                            count=self._ids.size)
+        gone = np.flatnonzero(slack & (self._ids >= since))
+        if gone.size:
+            self.h.deleteRows(int(gone.size), gone.astype(np.int32))
+        ids = self._ids[gone]
+        self._ids = np.delete(self._ids, gone)
+        return ids
 
     def solve(self) -> bool:
         """Solve from the current basis; return True if optimal (``x``, ``value`` set)."""
@@ -180,7 +206,8 @@ class DualIncrementalLP:
         self.h.addRows(self.n, self.c, self.c, 0, np.zeros(self.n, dtype=np.int32),
                        np.zeros(0, dtype=np.int32), np.zeros(0))
         self.rows = 0          # primal rows added (bounds excluded)
-        self._blocks: list[tuple[int, int]] = []  # (first row, dual columns) of each add
+        self._starts: list[int] = []  # the first row of each block added
+        self._owner = np.zeros(0, dtype=np.int64)  # each dual column's primal row
         eye = np.eye(self.n)
         self._add(eye, np.asarray(lower, float), np.asarray(upper, float))
         self.bound_cols = self.h.getNumCol()
@@ -189,16 +216,19 @@ class DualIncrementalLP:
         self.iterations = 0
         self.solves = 0
 
-    def _add(self, M: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> int:
-        """Add the dual columns of rows ``lo ≤ M z ≤ hi``; return how many."""
-        cols, costs = [], []
+    def _add(self, M: np.ndarray, lo: np.ndarray, hi: np.ndarray, first: int = -1) -> int:
+        """Add the dual columns of rows ``lo ≤ M z ≤ hi`` (rows ``first``…); return how many."""
+        cols, costs, rows = [], [], []
         for sgn, side in ((1.0, lo), (-1.0, hi)):
             fin = np.isfinite(side)
             if fin.any():
                 cols.append(sgn * M[fin])
                 costs.append(sgn * side[fin])
+                rows.append(first + np.flatnonzero(fin))
         if not cols:
             return 0
+        if first >= 0:
+            self._owner = np.r_[self._owner, np.concatenate(rows)]
         Gt = np.vstack(cols)  # one dual column per row
         g = np.concatenate(costs)
         k = Gt.shape[0]
@@ -219,7 +249,8 @@ class DualIncrementalLP:
         lo[lo <= -self.inf] = -np.inf
         hi[hi >= self.inf] = np.inf
         first = self.rows
-        self._blocks.append((first, self._add(M, lo, hi)))
+        self._add(M, lo, hi, first)
+        self._starts.append(first)
         self.rows += k
         return first, self.rows
 
@@ -238,18 +269,41 @@ class DualIncrementalLP:
         """Remove every primal row from index ``first`` on (a block boundary)."""
         if first >= self.rows:
             return
-        starts = [b[0] for b in self._blocks]
-        if first not in starts:
+        if first not in self._starts:
             raise ValueError(f"drop_from({first}): not the start of a block of rows "
-                             f"(blocks start at {starts})")
-        k = 0
-        while self._blocks and self._blocks[-1][0] >= first:
-            k += self._blocks.pop()[1]
-        total = self.h.getNumCol()
-        if k:
-            idx = np.arange(total - k, total, dtype=np.int32)
+                             f"(blocks start at {self._starts})")
+        self._starts = [b for b in self._starts if b < first]
+        gone = np.flatnonzero(self._owner >= first)
+        if gone.size:
+            idx = (self.bound_cols + gone).astype(np.int32)
             self.h.deleteCols(int(idx.size), idx)
+        self._owner = self._owner[self._owner < first]
         self.rows = first
+
+    def prune(self, since: int = 0) -> np.ndarray:
+        """Remove the rows (index ``since`` on) the last solution does not bind; return their indices.
+
+        A row none of whose dual columns is basic holds no weight in the optimum
+        (its multipliers are zero): removing it keeps the optimum and the basis,
+        and makes the next solves cheaper (the dual simplex prices every
+        column).  Rows keep their indices (:meth:`drop_from` still works); a row
+        removed may be added again.  Prune only after a solve, and not between
+        a :meth:`mark` and its :meth:`restore`.
+        """
+        basis = self.h.getBasis()
+        if not getattr(basis, "valid", False) or not self._owner.size:
+            return np.zeros(0, dtype=np.int64)
+        basic_st = self._hs.HighsBasisStatus.kBasic
+        status = list(basis.col_status)[self.bound_cols:]
+        basic = np.fromiter((st == basic_st for st in status), bool, count=self._owner.size)
+        binding = np.unique(self._owner[basic])
+        gone = np.flatnonzero((self._owner >= since) & ~np.isin(self._owner, binding))
+        if gone.size:
+            idx = (self.bound_cols + gone).astype(np.int32)
+            self.h.deleteCols(int(idx.size), idx)
+        rows = np.unique(self._owner[gone])
+        self._owner = np.delete(self._owner, gone)
+        return rows
 
     def solve(self) -> bool:
         """Solve from the current basis; return True if the primal is optimal."""

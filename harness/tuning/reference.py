@@ -563,6 +563,13 @@ def design_reference(obj: RampObjective, D: int, *, target: float = 0.95,
     c_W, M_W = c_E[mm] / band, M_E[mm] / band  # (P_mm, W), (P_mm, W, n)
     n_mm = int(mm.sum())
     kept: set[tuple[int, int]] = set()
+    row_key: dict[int, tuple[int, int]] = {}  # each lazy row's key, by its index in the LP
+    lazy0 = lp.rows  # the rows from here on are lazy (pruned when slack, added again if broken)
+
+    def prune() -> None:
+        """Drop the lazy rows the last solution leaves slack (cheaper solves; exact)."""
+        for r in lp.prune(lazy0).tolist():
+            kept.discard(row_key.pop(r))
 
     def solve(m: int) -> bool:
         """Solve with the band from sample m on, adding the rows the solution breaks."""
@@ -609,13 +616,17 @@ def design_reference(obj: RampObjective, D: int, *, target: float = 0.95,
             for f in sorted({r[1] for r in found}):
                 M, tau, lo, hi = fams[f]
                 idx = np.array([r[2] for r in found if r[1] == f])
-                kept.update(r[3] for r in found if r[1] == f)
-                lp.add(np.hstack([M[idx], np.full((idx.size, 1), -tau)]), lo[idx], hi[idx])
+                keys = [r[3] for r in found if r[1] == f]
+                kept.update(keys)
+                r0, _ = lp.add(np.hstack([M[idx], np.full((idx.size, 1), -tau)]), lo[idx],
+                               hi[idx])
+                row_key.update(zip(range(r0, r0 + len(keys)), keys))
             if not added:
                 return True
 
     if not solve(sp.k_hi + 1) or lp.x[n] > target:
         return None
+    prune()
     notes: list[str] = []
     best = (sp.k_hi + 1, lp.x[:n].copy(), float(lp.x[n]))
     # the earliest feasible m: its error ratio t(m) grows as m goes down; the next m is where
@@ -637,11 +648,14 @@ def design_reference(obj: RampObjective, D: int, *, target: float = 0.95,
         if solve(m) and lp.x[n] <= target:
             good, best = m, (m, lp.x[:n].copy(), float(lp.x[n]))  # type: ignore[assignment]
             ts[m] = max(float(lp.x[n]), 1e-12)
+            prune()
         else:
             ts[m] = float(lp.x[n]) if lp.solves and lp.x[n] > target else math.inf
             lp.restore(first)
             kept.clear()
             kept.update(snap)
+            for r in [r for r in row_key if r >= first[0]]:
+                del row_key[r]
             below = m
         # the secant of ln t through the probes nearest the crossing
         near = sorted((k for k in ts if math.isfinite(ts[k])), key=lambda k: abs(
