@@ -17,7 +17,9 @@ worst case of the scoring set), and this prints:
     python benchmarks/bench_machines.py --n 24 --seed 7 [--workers 2]
 
 The limits are cached on disk (``$DJL_FMU_CACHE/bound``) by the move, the map, the set and
-the code: a second run of the same seed costs the recommendations and the peers only.
+the code: a second run of the same seed costs the recommendations and the peers only.  The
+recommendations are designed cold (``DJL_FMU_RECOMMEND_CACHE=off``: the design time printed
+is the design's), unless ``--warm``.
 """
 
 from __future__ import annotations
@@ -63,7 +65,11 @@ def main() -> None:
     ap.add_argument("--n", type=int, default=24, help="machines (default 24)")
     ap.add_argument("--seed", type=int, default=7, help="seed of the class (default 7)")
     ap.add_argument("--workers", type=int, default=1, help="processes (default 1)")
+    ap.add_argument("--warm", action="store_true",
+                    help="reuse recommendations cached by an earlier run (default: cold)")
     args = ap.parse_args()
+    if not args.warm:
+        os.environ["DJL_FMU_RECOMMEND_CACHE"] = "off"  # inherited by the workers
     print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores; "
           f"class: {DEFAULT_CLASS.describe()}; seed {args.seed}, {args.n} machines")
     t0 = time.perf_counter()

@@ -58,6 +58,7 @@ import dataclasses
 import hashlib
 import json
 import math
+import os
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -69,6 +70,7 @@ import numpy as np
 from . import __version__
 from .degradation import Degradation
 from .files import write_text
+from ._resources import fmu_src_dir
 from .fmu.build import cache_dir
 from .peers.motion_axis import cosimulate_reference
 from .peers.shapers import base_motion, shape
@@ -697,19 +699,27 @@ def _quiet_of(c: Candidate, sc: Scenario, session: Session, band: float,
 # ------------------------------------------------------------------ the cache
 
 
-_SOURCES = ("recommend.py", "tuning/shaping.py", "tuning/search.py", "tuning/rule.py",
-            "tuning/tune.py", "tuning/graceful.py", "scoring.py", "uncertainty.py",
-            "simulation/master.py", "simulation/shaped_axis.py", "shaper_designs.py")
-"""The modules whose code a cached recommendation depends on (their digest is in its key)."""
+def _sources() -> list[Path]:
+    """The code a cached recommendation may depend on: every harness module but the CLI's, the C core.
+
+    Their digest is in its key: any change of the code a design runs through
+    (the LP, the objectives, the simulation, the scoring) tunes it again.
+    """
+    root = Path(__file__).resolve().parent
+    out = sorted(p for p in root.rglob("*.py") if "commands" not in p.relative_to(root).parts)
+    try:  # and the C core the fast engine and the FMU are built from
+        out += sorted(p for p in fmu_src_dir().glob("*.[ch]"))
+    except (OSError, RuntimeError):  # pragma: no cover - an install without the sources
+        pass
+    return out
 
 
 def _cache_key(sc: Scenario, band: float, signed: bool = True,
                assumed: UnmodelledModes | None = None) -> str:
     """Return a recommendation's key: the move, the map, the uncertainty, the band, the code."""
-    root = Path(__file__).resolve().parent
     h = hashlib.sha256()
-    for name in _SOURCES:
-        h.update((root / name).read_bytes())
+    for path in _sources():
+        h.update(path.read_bytes())
     case = (sc.move, sc.z, sc.modemap, sc.uncertainty, sc.simulation.Te, sc.simulation.step,
             sc.simulation.short_stage, sc.compare.JL_T_F, sc.compare.jl_tuning,
             sc.compare.djl_rule, sc.compare.period_band, sc.compare.max_motion_time)
@@ -834,7 +844,8 @@ def recommend(sc: Scenario, session: Session, band: float, *,
     cache : bool
         Keep the result on disk (next to the FMU builds, ``$DJL_FMU_CACHE``),
         keyed by the move, the map, the uncertainty, the band and the code of
-        the tuning: the same case is not tuned twice.
+        the harness: the same case is not tuned twice (the environment variable
+        ``DJL_FMU_RECOMMEND_CACHE=off`` turns it off everywhere).
     signed : bool
         Let the JL*shaper family use shapers with negative amplitudes, their
         bounds kept on every sample (:func:`harness.tuning.shaping.optimal_shaper`):
@@ -849,6 +860,8 @@ def recommend(sc: Scenario, session: Session, band: float, *,
     Recommendation
     """
     t0 = time.perf_counter()
+    if os.environ.get("DJL_FMU_RECOMMEND_CACHE", "").strip().lower() in ("0", "off", "no"):
+        cache = False  # the benchmarks' cold designs
     path = cache_dir() / "recommend" / f"{_cache_key(sc, band, signed, unmodelled)}.json" \
         if cache else None
     if path is not None and path.is_file():

@@ -251,6 +251,31 @@ def test_a_cached_recommendation_is_the_same(fast, cases, tmp_path, monkeypatch)
     assert again.explanation == first.explanation and again.widths == first.widths
 
 
+def test_the_cache_key_follows_the_code_of_the_design(cases, monkeypatch, tmp_path):
+    import harness.recommend as R
+
+    sc, band, _, _ = cases["Y"]
+    names = {p.name for p in R._sources()}
+    # the LP and the reference's objective (missing from the key before issue 33's review)
+    for name in ("lp.py", "reference.py", "graceful.py", "recommend.py", "djl_eval.c"):
+        assert name in names, name
+    extra = tmp_path / "module.py"
+    extra.write_text("A = 1\n")
+    monkeypatch.setattr(R, "_sources", lambda: [extra])
+    k1 = R._cache_key(sc, band)
+    extra.write_text("A = 2\n")
+    assert R._cache_key(sc, band) != k1
+
+
+def test_the_cache_can_be_turned_off(fast, cases, tmp_path, monkeypatch):
+    monkeypatch.setenv("DJL_FMU_CACHE", str(tmp_path))
+    monkeypatch.setenv("DJL_FMU_RECOMMEND_CACHE", "off")
+    sc, band, jl, _ = cases["Y"]
+    rec = recommend(sc, fast, band, jl=jl)
+    assert "from the cache" not in rec.notes
+    assert not (tmp_path / "recommend").exists() or not any((tmp_path / "recommend").iterdir())
+
+
 def test_positive_only_recommendation_keeps_amplitudes_positive(fast, cases):
     sc, band, jl, jl_run = cases["Y"]
     rec = recommend(sc, fast, band, jl=jl, cache=False, signed=False)
