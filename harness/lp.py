@@ -134,7 +134,7 @@ class IncrementalLP:
             self.rows = first
 
     def prune(self, since: int = 0) -> np.ndarray:
-        """Remove the rows (index ``since`` on) the last solution does not bind; return their indices.
+        """Remove the rows (index ``since`` on) the last solution leaves slack; return them.
 
         A row whose slack is basic holds no weight in the optimum: removing it
         keeps the optimum and the basis, and makes the next solves cheaper.
@@ -281,7 +281,7 @@ class DualIncrementalLP:
         self.rows = first
 
     def prune(self, since: int = 0) -> np.ndarray:
-        """Remove the rows (index ``since`` on) the last solution does not bind; return their indices.
+        """Remove the rows (index ``since`` on) the last solution leaves slack; return them.
 
         A row none of whose dual columns is basic holds no weight in the optimum
         (its multipliers are zero): removing it keeps the optimum and the basis,

@@ -68,9 +68,9 @@ from typing import Any
 import numpy as np
 
 from . import __version__
+from ._resources import fmu_src_dir
 from .degradation import Degradation
 from .files import write_text
-from ._resources import fmu_src_dir
 from .fmu.build import cache_dir
 from .peers.motion_axis import cosimulate_reference
 from .peers.shapers import base_motion, shape
@@ -700,7 +700,7 @@ def _quiet_of(c: Candidate, sc: Scenario, session: Session, band: float,
 
 
 def _sources() -> list[Path]:
-    """The code a cached recommendation may depend on: every harness module but the CLI's, the C core.
+    """Return the code a cached recommendation may depend on (harness but its CLI, C core).
 
     Their digest is in its key: any change of the code a design runs through
     (the LP, the objectives, the simulation, the scoring) tunes it again.

@@ -252,19 +252,19 @@ def test_a_cached_recommendation_is_the_same(fast, cases, tmp_path, monkeypatch)
 
 
 def test_the_cache_key_follows_the_code_of_the_design(cases, monkeypatch, tmp_path):
-    import harness.recommend as R
+    import harness.recommend as rmod
 
     sc, band, _, _ = cases["Y"]
-    names = {p.name for p in R._sources()}
+    names = {p.name for p in rmod._sources()}
     # the LP and the reference's objective (missing from the key before issue 33's review)
     for name in ("lp.py", "reference.py", "graceful.py", "recommend.py", "djl_eval.c"):
         assert name in names, name
     extra = tmp_path / "module.py"
     extra.write_text("A = 1\n")
-    monkeypatch.setattr(R, "_sources", lambda: [extra])
-    k1 = R._cache_key(sc, band)
+    monkeypatch.setattr(rmod, "_sources", lambda: [extra])
+    k1 = rmod._cache_key(sc, band)
     extra.write_text("A = 2\n")
-    assert R._cache_key(sc, band) != k1
+    assert rmod._cache_key(sc, band) != k1
 
 
 def test_the_cache_can_be_turned_off(fast, cases, tmp_path, monkeypatch):

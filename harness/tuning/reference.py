@@ -620,7 +620,7 @@ def design_reference(obj: RampObjective, D: int, *, target: float = 0.95,
                 kept.update(keys)
                 r0, _ = lp.add(np.hstack([M[idx], np.full((idx.size, 1), -tau)]), lo[idx],
                                hi[idx])
-                row_key.update(zip(range(r0, r0 + len(keys)), keys))
+                row_key.update(zip(range(r0, r0 + len(keys)), keys, strict=True))
             if not added:
                 return True
 
