@@ -134,8 +134,9 @@ class Degradation:
             else:
                 i = int(np.argmin(np.abs(self.widths - w))) + 1
                 i = min(i, len(self.widths) - 1)
-                out.append(f"Wider than stated ({words}): the recommended profile holds up to "
-                           f"{w:g}x the stated error ({_absolute(self.spec, k, w)}); beyond, "
+                held = (f"holds up to {w:g}x the stated error ({_absolute(self.spec, k, w)}); "
+                        f"beyond" if w > 0 else "does not hold past the exact map: there")
+                out.append(f"Wider than stated ({words}): the recommended profile {held}, "
                            f"{who} is better ({_absolute(self.spec, k, self.widths[i])}: "
                            f"{self.curves[who][k][i]:.3f} s against {rec[k][i]:.3f} s; {figs}).")
         return out

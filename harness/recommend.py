@@ -779,8 +779,10 @@ def _explain(rec: Recommendation, sc: Scenario, ys: Yardstick) -> list[str]:
     w, who = rec.holds_to()
     if math.isfinite(w):
         if who:
-            out.append(f"no worse than every textbook shaper (JL*ZV, ZVD, EI, SI) up to "
-                       f"{w:g}x the stated error; beyond, {who} is better (largest excess "
+            upto = (f"up to {w:g}x the stated error; beyond" if w > 0
+                    else "not past the exact map; there")
+            out.append(f"no worse than every textbook shaper (JL*ZV, ZVD, EI, SI) {upto}, "
+                       f"{who} is better (largest excess "
                        f"{100 * (b.excess - 1):.1f} % at {b.excess_at})")
         else:
             out.append(f"no worse than every textbook shaper (JL*ZV, ZVD, EI, SI) at any "

@@ -126,8 +126,11 @@ def test_degradation_says_how_far_a_method_holds():
                     textbook=("JL*EI", "JL*ZV"))
     # at w = 0 ZV settles sooner: the recommendation holds nowhere
     assert d.holds_to() == (0.0, "JL*ZV")
+    assert "does not hold past the exact map: there, JL*ZV is better (+/-2.5 %" in d.lines()[0]
     curves["JL*ZV"]["map_scale"][0] = 1.0
     assert d.holds_to() == (1.25, "JL*EI")  # EI is better from 1.5 on
+    assert "holds up to 1.25x the stated error (+/-12.5 %); beyond, JL*EI is better " \
+           "(+/-15 %: 1.400 s against 1.500 s" in d.lines()[0]
     curves["JL*EI"]["map_scale"][:] = 9.0
     curves["JL*ZV"]["map_scale"][:] = 9.0
     assert d.holds_to() == (2.0, "")
