@@ -111,7 +111,12 @@ def test_model_description_declares_capabilities(fmus, version):
                 assert v.max is None or float(x) <= float(v.max), v.name
     # issue #12: the inputs, with their declared start values
     inputs = {v.name: v for v in md.modelVariables if v.causality == "input"}
-    assert set(inputs) == {"target", "execute", "stop", "f_mode"}
+    assert set(inputs) == {"target", "execute", "stop", "f_mode"} | {
+        n for n in inputs if n.startswith("cmd_")}  # issue 34's per-command values
+    assert {n.split("[")[0] for n in inputs if n.startswith("cmd_")} == {
+        "cmd_v_max", "cmd_a_max", "cmd_d_max", "cmd_profile", "cmd_T_F", "cmd_shaper",
+        "cmd_shaper_n", "cmd_shaper_amplitude", "cmd_shaper_delay", "cmd_profile_code",
+        "cmd_shaper_code"}
     assert inputs["execute"].type == inputs["stop"].type == "Boolean"
     assert inputs["target"].unit == "m" and inputs["f_mode"].unit == "Hz"
     assert by["jerk_source"].declaredType.name == "JerkSource"
