@@ -4,7 +4,7 @@
 #define DJL_VARS_H
 
 #define DJL_MODEL_IDENTIFIER "JerkLimitedTrajectory"
-#define DJL_INSTANTIATION_TOKEN "{16576608-698d-582d-a923-9ce44cdcadc6}"
+#define DJL_INSTANTIATION_TOKEN "{13c92160-4217-53d5-ad38-8daad474b2ef}"
 #define DJL_VARS_MAX_SEGMENTS 32
 
 /* value references (arrays: first element; element i at base + i) */
@@ -134,19 +134,19 @@ typedef enum {
 /* codes of the output cmd_error_id (spec.CMD_ERRORS) */
 typedef enum {
     CMD_ERR_NONE = 0,
-    CMD_ERR_TARGET = 1, /* target: target is not finite or |target| > 1e300 m */
+    CMD_ERR_TARGET = 1, /* target: target is not finite or beyond 1e300 m in magnitude (an execute) */
     CMD_ERR_V_MAX = 2, /* cmd_v_max: cmd_v_max is neither 0 nor a finite velocity > 0 */
     CMD_ERR_A_MAX = 3, /* cmd_a_max: cmd_a_max is neither 0 nor a finite acceleration > 0 */
     CMD_ERR_D_MAX = 4, /* cmd_d_max: cmd_d_max is neither 0 nor a finite deceleration > 0 */
     CMD_ERR_PROFILE = 5, /* cmd_profile: cmd_profile is not 0, 1, 2 or 3 */
-    CMD_ERR_T_F = 6, /* cmd_T_F: a cmd_T_F[i] is neither 0 nor a jerk time of 1..100000000 samples of Te (finite, >= Te/2) */
-    CMD_ERR_JERK_WITH_F_MODE = 7, /* cmd_profile: cmd_profile or cmd_T_F set with jerk_source = 2 or 3 (the jerk times come from f_mode) */
-    CMD_ERR_SHAPER = 8, /* cmd_shaper: cmd_shaper is not 0..5 */
+    CMD_ERR_T_F = 6, /* cmd_T_F: a jerk time the command uses (cmd_T_F[i], or the T_Fi its 0 stands for) is not one of 1..100000000 samples of Te (finite, >= Te/2) */
+    CMD_ERR_JERK_WITH_F_MODE = 7, /* cmd_profile: cmd_profile or a cmd_T_F[i] not 0 with jerk_source = 2 or 3 (the jerk times come from f_mode) */
+    CMD_ERR_SHAPER = 8, /* cmd_shaper: cmd_shaper is not 0..5, or its design is refused (f_shaper, zeta_shaper, f_mode) */
     CMD_ERR_SHAPER_N = 9, /* cmd_shaper_n: cmd_shaper = 4 and cmd_shaper_n is not 0..8 */
-    CMD_ERR_SHAPER_AMPLITUDE = 10, /* cmd_shaper_amplitude: cmd_shaper = 4: an amplitude is not finite or they do not sum to 1 within 1e-09 */
-    CMD_ERR_SHAPER_DELAY = 11, /* cmd_shaper_delay: cmd_shaper = 4: a delay is negative, not finite or beyond 4096 samples of Te (at the f_mode of the command with shaper_source = 2) */
-    CMD_ERR_SHAPER_WHILE_MOVING = 12, /* cmd_shaper: the move's shaper differs from the one in force while the output is not at rest (done false, or v != 0): another shaper starts from rest */
-    CMD_ERR_NO_MOTION = 13, /* target: no motion within the limits reaches target (too far for the limits, or longer than the FMU's horizon): the planner's reason is logged */
+    CMD_ERR_SHAPER_AMPLITUDE = 10, /* cmd_shaper_amplitude: cmd_shaper = 4: an amplitude is not finite, or they do not sum to 1 within 1e-09 */
+    CMD_ERR_SHAPER_DELAY = 11, /* cmd_shaper_delay: cmd_shaper = 4: a delay is negative, not finite, or beyond 4096 samples of Te (with shaper_source = 2: at the f_mode of the command) */
+    CMD_ERR_SHAPER_WHILE_MOVING = 12, /* cmd_shaper: another shaper than the one in force while the output is not at rest (done false, or v != 0): a shaper changes only from rest */
+    CMD_ERR_NO_MOTION = 13, /* target: no motion within the command's limits reaches target (too far for them, or longer than the FMU's horizon; a stop: no stop within DJL_MAX_PLAN_END samples): the planner's reason is logged */
 } djl_cmd_error;
 
 #ifdef DJL_VARS_TABLES

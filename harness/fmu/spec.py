@@ -151,26 +151,35 @@ SHAPER_AMPLITUDE_TOLERANCE = 1e-9
 """A custom shaper's amplitudes must sum to 1 within this (``DJL_SHAPER_SUM_TOLERANCE``)."""
 
 CMD_ERRORS: tuple[tuple[int, str, str, str], ...] = (
-    (1, "TARGET", "target", "target is not finite or |target| > 1e300 m"),
+    (1, "TARGET", "target", "target is not finite or beyond 1e300 m in magnitude (an execute)"),
     (2, "V_MAX", "cmd_v_max", "cmd_v_max is neither 0 nor a finite velocity > 0"),
     (3, "A_MAX", "cmd_a_max", "cmd_a_max is neither 0 nor a finite acceleration > 0"),
     (4, "D_MAX", "cmd_d_max", "cmd_d_max is neither 0 nor a finite deceleration > 0"),
     (5, "PROFILE", "cmd_profile", "cmd_profile is not 0, 1, 2 or 3"),
-    (6, "T_F", "cmd_T_F", "a cmd_T_F[i] is neither 0 nor a jerk time of 1.."
-                   f"{MAX_FILTER_SAMPLES} samples of Te (finite, >= Te/2)"),
-    (7, "JERK_WITH_F_MODE", "cmd_profile", "cmd_profile or cmd_T_F set with jerk_source = 2 or 3 (the jerk times "
-                       "come from f_mode)"),
-    (8, "SHAPER", "cmd_shaper", "cmd_shaper is not 0..5"),
-    (9, "SHAPER_N", "cmd_shaper_n", f"cmd_shaper = 4 and cmd_shaper_n is not 0..{MAX_SHAPER_IMPULSES}"),
-    (10, "SHAPER_AMPLITUDE", "cmd_shaper_amplitude", "cmd_shaper = 4: an amplitude is not finite or they do not "
-                                 f"sum to 1 within {SHAPER_AMPLITUDE_TOLERANCE:g}"),
-    (11, "SHAPER_DELAY", "cmd_shaper_delay", "cmd_shaper = 4: a delay is negative, not finite or beyond "
-                             f"{MAX_SHAPER_DELAY_SAMPLES} samples of Te (at the f_mode of the "
-                             "command with shaper_source = 2)"),
-    (12, "SHAPER_WHILE_MOVING", "cmd_shaper", "the move's shaper differs from the one in force while the output is not at "
-                       "rest (done false, or v != 0): another shaper starts from rest"),
-    (13, "NO_MOTION", "target", "no motion within the limits reaches target (too far for the limits, or "
-                   "longer than the FMU's horizon): the planner's reason is logged"),
+    (6, "T_F", "cmd_T_F",
+     f"a jerk time the command uses (cmd_T_F[i], or the T_Fi its 0 stands for) is not one of "
+     f"1..{MAX_FILTER_SAMPLES} samples of Te (finite, >= Te/2)"),
+    (7, "JERK_WITH_F_MODE", "cmd_profile",
+     "cmd_profile or a cmd_T_F[i] not 0 with jerk_source = 2 or 3 (the jerk times come from "
+     "f_mode)"),
+    (8, "SHAPER", "cmd_shaper",
+     "cmd_shaper is not 0..5, or its design is refused (f_shaper, zeta_shaper, f_mode)"),
+    (9, "SHAPER_N", "cmd_shaper_n",
+     f"cmd_shaper = 4 and cmd_shaper_n is not 0..{MAX_SHAPER_IMPULSES}"),
+    (10, "SHAPER_AMPLITUDE", "cmd_shaper_amplitude",
+     "cmd_shaper = 4: an amplitude is not finite, or they do not sum to 1 within "
+     f"{SHAPER_AMPLITUDE_TOLERANCE:g}"),
+    (11, "SHAPER_DELAY", "cmd_shaper_delay",
+     "cmd_shaper = 4: a delay is negative, not finite, or beyond "
+     f"{MAX_SHAPER_DELAY_SAMPLES} samples of Te (with shaper_source = 2: at the f_mode of the "
+     "command)"),
+    (12, "SHAPER_WHILE_MOVING", "cmd_shaper",
+     "another shaper than the one in force while the output is not at rest (done false, or "
+     "v != 0): a shaper changes only from rest"),
+    (13, "NO_MOTION", "target",
+     "no motion within the command's limits reaches target (too far for them, or longer "
+     "than the FMU's horizon; a stop: no stop within DJL_MAX_PLAN_END samples): the "
+     "planner's reason is logged"),
 )
 """Codes of the output ``cmd_error_id`` (docs/generator.md, "Command errors"): code, C name
 (``CMD_ERR_<name>`` in ``djl_vars.h``), the input a message names, meaning.  0: no error."""
@@ -398,7 +407,8 @@ VARIABLES: tuple[Variable, ...] = (
        "as cmd_v_max); 0 = d_max (a stop: the stopped move's)", "m/s2"),
     _i("cmd_profile", 73, "Enumeration", 0, "Profile of the commanded move or stop (latched as "
        "cmd_v_max): 0 = the parameter's (a stop: the stopped move's), 1 = AL, 2 = JL "
-       "(cmd_T_F[1]), 3 = DJL (cmd_T_F[1..4])", declared_type="CmdProfile"),
+       "(cmd_T_F[1]), 3 = DJL (cmd_T_F[1..4]); another value is refused at the edge (cmd_error)",
+       min=0, max=3, declared_type="CmdProfile"),
     _i("cmd_T_F", 500, "Real", 0.0, "Jerk times of the stages of the commanded move or stop "
        "(latched as cmd_v_max); an element 0 = the parameter T_Fi (a stop: the stopped move's); "
        "JL uses the first", "s", size=4),
@@ -406,7 +416,8 @@ VARIABLES: tuple[Variable, ...] = (
        "execute edge; a stop keeps the move's): 0 = the parameter's design, 1 = ZV, 2 = ZVD, "
        "3 = EI (for f_shaper), 4 = custom (cmd_shaper_n, cmd_shaper_amplitude, "
        "cmd_shaper_delay), 5 = none; another shaper than the one in force only from rest "
-       "(done and v = 0)", declared_type="CmdShaper"),
+       "(done and v = 0); another value is refused at the edge (cmd_error)", min=0, max=5,
+       declared_type="CmdShaper"),
     _i("cmd_shaper_n", 75, "Integer", 0, "Impulses of the custom shaper of the commanded move "
        f"(cmd_shaper = 4), 1..{MAX_SHAPER_IMPULSES}; 0 = the parameters' custom design "
        "(shaper_n, shaper_amplitude, shaper_delay)"),
@@ -435,19 +446,18 @@ FMI2_ENUM_ALIAS_SUFFIX = "_code"
 
 
 def fmi2_integer_aliases() -> tuple[Variable, ...]:
-    """Integer aliases of the Enumeration parameters and inputs, declared in the FMI 2 model
-    description only (``profile_code`` .. ``shaper_source_code``, ``cmd_profile_code``,
-    ``cmd_shaper_code``).
+    """Integer aliases of the Enumeration parameters and inputs (FMI 2 model description only).
 
-    Some FMI 2 importers (those built on the FMI Library: libcosim, ecos) skip Enumeration
-    variables, so ``profile``, ``short_stage``, ``jerk_source``, ``shaper``,
-    ``shaper_source``, ``cmd_profile`` and ``cmd_shaper`` could not be set there.  FMI 2.0 (section 2.2.7, ``valueReference``)
-    makes a value reference unique per base type "Real, Integer/Enumeration, Boolean, String"
-    except for alias variables: an Integer with the value reference of an Enumeration is an
-    alias of it, the same value read and written with ``fmi2SetInteger`` /
-    ``fmi2GetInteger``.  Each alias is ``<name>_code``, declared after every other variable
-    (the indices of ``<ModelStructure>`` do not move); FMI 3 has none (its ``<Alias>`` keeps
-    the type).
+    ``profile_code`` .. ``shaper_source_code``, and for the inputs ``cmd_profile_code`` and
+    ``cmd_shaper_code``.  Some FMI 2 importers (those built on the FMI Library: libcosim,
+    ecos) skip Enumeration variables, so ``profile``, ``short_stage``, ``jerk_source``,
+    ``shaper``, ``shaper_source``, ``cmd_profile`` and ``cmd_shaper`` could not be set
+    there.  FMI 2.0 (section 2.2.7, ``valueReference``) makes a value reference unique per
+    base type "Real, Integer/Enumeration, Boolean, String" except for alias variables: an
+    Integer with the value reference of an Enumeration is an alias of it, the same value
+    read and written with ``fmi2SetInteger`` / ``fmi2GetInteger``.  Each alias is
+    ``<name>_code``, declared after every other variable (the indices of
+    ``<ModelStructure>`` do not move); FMI 3 has none (its ``<Alias>`` keeps the type).
     """
     out = []
     for v in VARIABLES:
