@@ -371,10 +371,10 @@ static model_status set_input(model_instance *m, const model_var *v, double valu
     default: break;
     }
     /* the per-command values: any value is kept, a command checks those it uses at its
-     * edge (an invalid one: cmd_error, the command refused, the simulation goes on) */
-    if (v->type == 'I' && !(value >= -2147483648.0 && value <= 2147483647.0))
-        return model_refuse(m, "set: %s = %.17g is out of the range of a 32-bit integer (the "
-                            "previous value is kept)", v->name, value);
+     * edge (an invalid one: cmd_error, the command refused, the simulation goes on); an
+     * integer beyond 32 bits (an FMI 3 Int64) is kept saturated, invalid all the same */
+    if (v->type == 'I') value = value < -2147483648.0 ? -2147483648.0
+                                : value > 2147483647.0 ? 2147483647.0 : value;
     switch (v->base) {
     case VR_CMD_V_MAX: d->cmd.v_max = value; return ST_OK;
     case VR_CMD_A_MAX: d->cmd.a_max = value; return ST_OK;

@@ -457,3 +457,15 @@ def test_cmd_inputs_at_zero_or_never_latched_change_nothing(g):
                     "cmd_T_F": [0.2, 0.0, math.nan, 0.0], **sets}
         busy.step(sets)
     assert np.array_equal(np.array(busy.rows), np.array(base.rows))
+
+
+def test_an_int64_beyond_32_bits_is_taken_and_refused_at_the_edge(inst):
+    """FMI 3 sets an Enumeration as Int64: 2^40 for cmd_profile is kept (saturated to the
+    32-bit range, no error at set) and the execute that would use it is refused (code 5)."""
+    g = inst[3]
+    r = Run(g)
+    vr = g.variable("cmd_profile").valueReference
+    g._call(g.fmu.setInt64, [vr], [2**40])
+    assert g._call(g.fmu.getInt64, [vr], 1)[0] == 2**31 - 1
+    r.play(_move(2, 0.5), 10)
+    assert r.col("cmd_error_id")[-1] == CODE["PROFILE"] and r.col("v")[-1] == 0.0
