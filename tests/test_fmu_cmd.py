@@ -13,7 +13,9 @@ hold the FMU to:
    and leaves every other output bit for bit as a run without it; the next valid command
    clears the error;
 3. FMU states saved in the middle of a move with per-command values replay bit for bit;
-4. the cmd_* inputs left at 0 (or set to values that no edge latches) change nothing.
+4. the cmd_* inputs left at 0 (or set to values that no edge latches) change nothing;
+5. random commands with random values (hypothesis; DJL_CMD_EXAMPLES examples, 12 by
+   default): every one lands on its target within the limits in force.
 
 Every number is checked against an independent computation: the peak velocity against
 cmd_v_max, the landing against target, a ramp's length against cmd_T_F / Te, the shaped
@@ -24,12 +26,15 @@ figures.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from harness.fmu import spec
 from harness.fmu.runner import GeneratorFMU
@@ -469,3 +474,55 @@ def test_an_int64_beyond_32_bits_is_taken_and_refused_at_the_edge(inst):
     assert g._call(g.fmu.getInt64, [vr], 1)[0] == 2**31 - 1
     r.play(_move(2, 0.5), 10)
     assert r.col("cmd_error_id")[-1] == CODE["PROFILE"] and r.col("v")[-1] == 0.0
+
+
+# ------------------------------------------- 5. random commands with their own values
+
+
+@st.composite
+def _commands(draw: st.DrawFn) -> list[tuple[int, dict[str, Any]]]:
+    """1..5 executes at random steps (mid-move, at rest), each with random valid values."""
+    n = draw(st.integers(1, 5))
+    ks = sorted(draw(st.lists(st.integers(3, 1500), min_size=n, max_size=n, unique=True)))
+    out = []
+    for k in ks:
+        # (on a grid of 1 um: a distance of 1e-308 m is a planner's refusal of its own,
+        # whatever the command's values)
+        c: dict[str, Any] = {"target": draw(st.integers(-10**6, 10**6)) * 1e-6}
+        c["cmd_v_max"] = draw(st.sampled_from([0.0, 0.15, 0.4, 1.7]))
+        c["cmd_a_max"] = draw(st.sampled_from([0.0, 3.0, 25.0]))
+        c["cmd_d_max"] = draw(st.sampled_from([0.0, 2.0, 18.0]))
+        c["cmd_profile"] = draw(st.integers(0, 3))
+        c["cmd_T_F"] = [draw(st.sampled_from([0.0, 0.005, 0.021, 0.07])) for _ in range(4)]
+        out.append((k, c))
+    return out
+
+
+@settings(max_examples=int(os.environ.get("DJL_CMD_EXAMPLES", "12")), deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(cmds=_commands())
+def test_random_commands_land_on_their_target_within_their_limits(g, cmds):
+    """Every command accepted; the axis ends at rest exactly on the last target; |v| and
+    |a| never pass the largest limits in force; after the last command, once the speed is
+    within its cmd_v_max (at once, or after the stop a slower command starts with) it
+    stays within it, and so does the acceleration within its own limits."""
+    r = Run(g)
+    script = _script(*[_move(k, c["target"], **{n: v for n, v in c.items() if n != "target"})
+                       for k, c in cmds])
+    k_last, last = cmds[-1]
+    r.play(script, k_last + 2)
+    for _ in range(40):
+        if r.col("done")[-1] and r.col("v")[-1] == 0.0 and len(r.rows) > k_last + 2:
+            break
+        r.play({}, 500)
+    v, a, x = r.col("v"), r.col("a"), r.col("x")
+    assert not r.col("cmd_error").any(), [str(m) for m in g.log if "refused" in str(m)]
+    assert x[-1] == pytest.approx(last["target"], abs=1e-12) and v[-1] == 0.0
+    vmax = max([AXIS["v_max"]] + [c["cmd_v_max"] for _, c in cmds])
+    amax = max([AXIS["a_max"], AXIS["d_max"]] + [max(c["cmd_a_max"], c["cmd_d_max"])
+                                                for _, c in cmds])
+    assert np.abs(v).max() <= vmax * (1 + 1e-9) and np.abs(a).max() <= amax * (1 + 1e-9)
+    v_cmd = last["cmd_v_max"] or AXIS["v_max"]
+    after = np.abs(v[k_last:])
+    within = np.nonzero(after <= v_cmd)[0]
+    assert within.size and after[within[0]:].max() <= v_cmd * (1 + 1e-9)
