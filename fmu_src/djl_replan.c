@@ -44,6 +44,7 @@ typedef struct {
     double Te, v_max, a_max, d_max;
     int lower;             /* the goal's v_max is below the old plan's (djl_goal) */
     int above;             /* ... and the axis moves faster than it */
+    double v_old;          /* the old plan's v_max */
 } replan_state;
 
 /* dv / (a Te), samples of the acceleration a for the velocity change dv: as written when
@@ -79,6 +80,7 @@ static void gather(const djl_plan *old, double u, replan_state *r)
     r->d_max = old->p.d_max;
     r->lower = 0;
     r->above = 0;
+    r->v_old = old->p.v_max;
     amag = djl_fabs(old->level0);
     for (i = 0; i < old->n_steps; i++) {
         const djl_step *st = &old->step[i];
@@ -208,7 +210,7 @@ static int64_t stage_start_end(const replan_state *r)
  *    level Te / 2. */
 static void end_stage(const replan_state *r, transition *t, int64_t e, int32_t N)
 {
-    double v_s, X_s, over, Nmin;
+    double v_s, X_s, over, Nmin, vlim;
     t->n = 0;
     t->end_at = -1;
     t->clipped = 0;
@@ -223,8 +225,11 @@ static void end_stage(const replan_state *r, transition *t, int64_t e, int32_t N
     t->n = 1;
     t->end_at = e;
     settle(r, t->s, 1, &v_s, &X_s);
-    over = djl_fabs(v_s) - r->v_max;
-    if (over > 1e-12 * r->v_max && N > 0 && !r->above) {
+    /* (an axis already above a goal's lower v_max: the stage ends within the old plan's,
+     * the speed comes down by the stop that follows) */
+    vlim = r->above ? r->v_old : r->v_max;
+    over = djl_fabs(v_s) - vlim;
+    if (over > 1e-12 * vlim && N > 0) {
         /* shorten the filter when the level pushes the speed up, else lengthen it */
         double cut = djl_ceil(2.0 * per_sample(over, djl_fabs(r->level), r->Te));
         double N0 = t->s[0].N;
@@ -683,7 +688,8 @@ djl_status djl_replan(const djl_plan *old, double u, const djl_goal *g, djl_plan
     if (g->a_max > 0.0) r.a_max = g->a_max;
     if (g->d_max > 0.0) r.d_max = g->d_max;
     /* the axis already faster than the goal's v_max: ending its stage cannot bring it
-     * within, and is not clipped for it (the new motion then starts with a stop) */
+     * within, and keeps it within the old plan's (the new motion then starts with a
+     * stop) */
     r.lower = g->v_max > 0.0 && g->v_max < old->p.v_max;
     r.above = r.lower && djl_fabs(r.v) > r.v_max;
     inf.origin = r.o;
