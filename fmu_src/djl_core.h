@@ -421,6 +421,12 @@ typedef struct {
                               stop and then come back (new jerk times that no longer land
                               from where the axis is: the caller keeps its plan), or a stop
                               that would rest past where the plan in progress rests */
+    double v_max, a_max, d_max; /* limits of the stages placed from b on and of the new
+                              motion (m/s, m/s2); 0: the old plan's.  Below the speed the
+                              axis settles at, a new motion is preceded by a stop (its
+                              d_max): the axis rests, then moves within v_max.  The new
+                              plan's own limits (its p) are the larger of the old plan's and
+                              these: its pieces hold the old plan's ramps. */
 } djl_goal;
 
 /* What a replan decided (for logs and diagnostics). */

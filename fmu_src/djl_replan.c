@@ -42,6 +42,9 @@ typedef struct {
     int n_run;
     djl_step run[DJL_MAX_PLAN_STEPS]; /* kept ramps running at o, tau relative to o (<= 0) */
     double Te, v_max, a_max, d_max;
+    int lower;             /* the goal's v_max is below the old plan's (djl_goal) */
+    int above;             /* ... and the axis moves faster than it */
+    double v_old;          /* the old plan's v_max */
 } replan_state;
 
 /* dv / (a Te), samples of the acceleration a for the velocity change dv: as written when
@@ -75,6 +78,9 @@ static void gather(const djl_plan *old, double u, replan_state *r)
     r->v_max = old->p.v_max;
     r->a_max = old->p.a_max;
     r->d_max = old->p.d_max;
+    r->lower = 0;
+    r->above = 0;
+    r->v_old = old->p.v_max;
     amag = djl_fabs(old->level0);
     for (i = 0; i < old->n_steps; i++) {
         const djl_step *st = &old->step[i];
@@ -204,7 +210,7 @@ static int64_t stage_start_end(const replan_state *r)
  *    level Te / 2. */
 static void end_stage(const replan_state *r, transition *t, int64_t e, int32_t N)
 {
-    double v_s, X_s, over, Nmin;
+    double v_s, X_s, over, Nmin, vlim;
     t->n = 0;
     t->end_at = -1;
     t->clipped = 0;
@@ -219,8 +225,11 @@ static void end_stage(const replan_state *r, transition *t, int64_t e, int32_t N
     t->n = 1;
     t->end_at = e;
     settle(r, t->s, 1, &v_s, &X_s);
-    over = djl_fabs(v_s) - r->v_max;
-    if (over > 1e-12 * r->v_max && N > 0) {
+    /* (an axis already above a goal's lower v_max: the stage ends within the old plan's,
+     * the speed comes down by the stop that follows) */
+    vlim = r->above ? r->v_old : r->v_max;
+    over = djl_fabs(v_s) - vlim;
+    if (over > 1e-12 * vlim && N > 0) {
         /* shorten the filter when the level pushes the speed up, else lengthen it */
         double cut = djl_ceil(2.0 * per_sample(over, djl_fabs(r->level), r->Te));
         double N0 = t->s[0].N;
@@ -469,11 +478,14 @@ static int walk(const replan_state *r, const djl_step *nw, int n_new, int64_t T,
 
 /* The new motion after the transition: from the cruise at v (m/s) to dist m
  * further, at rest, with the goal's jerk times (0: none needed). */
-static djl_status fresh_plan(const djl_plan *old, const djl_goal *g, double v, double dist,
-                             djl_plan *scratch, djl_error *err)
+static djl_status fresh_plan(const djl_plan *old, const replan_state *r, const djl_goal *g,
+                             double v, double dist, djl_plan *scratch, djl_error *err)
 {
     djl_params q = old->p;
     int i, al = g->N[0] == 0 && g->N[1] == 0 && g->N[2] == 0 && g->N[3] == 0;
+    q.v_max = r->v_max;
+    q.a_max = r->a_max;
+    q.d_max = r->d_max;
     q.profile = al ? DJL_PROFILE_AL : DJL_PROFILE_DJL;
     for (i = 0; i < 4; i++) q.T_F[i] = al ? q.Te : (double)g->N[i] * q.Te;
     q.x0 = 0.0;
@@ -504,6 +516,11 @@ static djl_status compose(const djl_plan *old, const replan_state *r, const tran
     double st[4], x_goal, kend;
     djl_params p = old->p;
     int np, i, ns;
+    /* the new plan's limits: the larger of the old plan's and the goal's (its pieces hold
+     * the old plan's ramps as well as the new motion) */
+    p.v_max = dmax2(p.v_max, r->v_max);
+    p.a_max = dmax2(p.a_max, r->a_max);
+    p.d_max = dmax2(p.d_max, r->d_max);
     /* a motion ending past DJL_MAX_PLAN_END: the FMU could neither reach its end nor
      * keep it in a state (issue 21: a stop at d_max = 3e-27 m/s^2 planned 1.6e15
      * samples, and the FMU then refused its own state) */
@@ -658,7 +675,23 @@ djl_status djl_replan(const djl_plan *old, double u, const djl_goal *g, djl_plan
             return set_error(err, DJL_E_PARAM, "N", (double)g->N[i],
                              "replan: jerk time of stage %d, %d samples, out of range", i + 1,
                              (int)g->N[i]);
+    for (i = 0; i < 3; i++) {
+        double lim = i == 0 ? g->v_max : i == 1 ? g->a_max : g->d_max;
+        if (!(lim == 0.0 || (djl_isfinite(lim) && lim > 0.0)))
+            return set_error(err, DJL_E_PARAM, i == 0 ? "v_max" : i == 1 ? "a_max" : "d_max",
+                             lim, "replan: limit %g: must be 0 (the old plan's) or a finite "
+                             "number > 0", lim);
+    }
     gather(old, u, &r);
+    /* the goal's limits, where it gives them (0: the old plan's) */
+    if (g->v_max > 0.0) r.v_max = g->v_max;
+    if (g->a_max > 0.0) r.a_max = g->a_max;
+    if (g->d_max > 0.0) r.d_max = g->d_max;
+    /* the axis already faster than the goal's v_max: ending its stage cannot bring it
+     * within, and keeps it within the old plan's (the new motion then starts with a
+     * stop) */
+    r.lower = g->v_max > 0.0 && g->v_max < old->p.v_max;
+    r.above = r.lower && djl_fabs(r.v) > r.v_max;
     inf.origin = r.o;
     inf.b = r.b;
     Nend = ending_filter(&r, g->N);
@@ -730,7 +763,15 @@ djl_status djl_replan(const djl_plan *old, double u, const djl_goal *g, djl_plan
                 goto fallback;
             }
         }
-        s2 = fresh_plan(old, g, v, dist, scratch, &e2);
+        if (r.lower && djl_fabs(v) > r.v_max * (1.0 + 1e-9)) {
+            /* faster than the goal's v_max (a lower one than the old plan's): no motion
+             * starts from there, the axis stops first */
+            set_error(&e2, DJL_E_INFEASIBLE, "v_max", r.v_max, "replan: the axis settles "
+                      "at %g m/s, above v_max = %g m/s", v, r.v_max);
+            s2 = DJL_E_INFEASIBLE;
+            goto fallback;
+        }
+        s2 = fresh_plan(old, &r, g, v, dist, scratch, &e2);
         if (s2 == DJL_OK) {
             s2 = compose(old, &r, &t, T, scratch, g, out, err);
             if (s2 != DJL_OK) return s2;

@@ -4,7 +4,7 @@
 #define DJL_VARS_H
 
 #define DJL_MODEL_IDENTIFIER "JerkLimitedTrajectory"
-#define DJL_INSTANTIATION_TOKEN "{bfb5f9ff-4d82-5e51-96fe-585a2ecaf217}"
+#define DJL_INSTANTIATION_TOKEN "{13c92160-4217-53d5-ad38-8daad474b2ef}"
 #define DJL_VARS_MAX_SEGMENTS 32
 
 /* value references (arrays: first element; element i at base + i) */
@@ -62,6 +62,17 @@ typedef enum {
     VR_TABLE_N = 65,
     VR_TABLE_SAMPLES = 1000,
     VR_TABLE_JERK = 2000,
+    VR_CMD_V_MAX = 70,
+    VR_CMD_A_MAX = 71,
+    VR_CMD_D_MAX = 72,
+    VR_CMD_PROFILE = 73,
+    VR_CMD_T_F = 500,
+    VR_CMD_SHAPER = 74,
+    VR_CMD_SHAPER_N = 75,
+    VR_CMD_SHAPER_AMPLITUDE = 600,
+    VR_CMD_SHAPER_DELAY = 700,
+    VR_CMD_ERROR = 76,
+    VR_CMD_ERROR_ID = 77,
 } djl_vr;
 
 /* log categories, in modelDescription order */
@@ -100,9 +111,43 @@ typedef enum {
 } djl_enum_shaper;
 
 typedef enum {
+    CMD_PROFILE_PARAMETER = 0,
+    CMD_PROFILE_AL = 1,
+    CMD_PROFILE_JL = 2,
+    CMD_PROFILE_DJL = 3,
+} djl_enum_cmd_profile;
+
+typedef enum {
+    CMD_SHAPER_PARAMETER = 0,
+    CMD_SHAPER_ZV = 1,
+    CMD_SHAPER_ZVD = 2,
+    CMD_SHAPER_EI = 3,
+    CMD_SHAPER_CUSTOM = 4,
+    CMD_SHAPER_NONE = 5,
+} djl_enum_cmd_shaper;
+
+typedef enum {
     SHAPER_SOURCE_F_SHAPER = 1,
     SHAPER_SOURCE_F_MODE = 2,
 } djl_enum_shaper_source;
+
+/* codes of the output cmd_error_id (spec.CMD_ERRORS) */
+typedef enum {
+    CMD_ERR_NONE = 0,
+    CMD_ERR_TARGET = 1, /* target: target is not finite or beyond 1e300 m in magnitude (an execute) */
+    CMD_ERR_V_MAX = 2, /* cmd_v_max: cmd_v_max is neither 0 nor a finite velocity > 0 */
+    CMD_ERR_A_MAX = 3, /* cmd_a_max: cmd_a_max is neither 0 nor a finite acceleration > 0 */
+    CMD_ERR_D_MAX = 4, /* cmd_d_max: cmd_d_max is neither 0 nor a finite deceleration > 0 */
+    CMD_ERR_PROFILE = 5, /* cmd_profile: cmd_profile is not 0, 1, 2 or 3 */
+    CMD_ERR_T_F = 6, /* cmd_T_F: a jerk time the command uses (cmd_T_F[i], or the T_Fi its 0 stands for) is not one of 1..100000000 samples of Te (finite, >= Te/2) */
+    CMD_ERR_JERK_WITH_F_MODE = 7, /* cmd_profile: cmd_profile or a cmd_T_F[i] not 0 with jerk_source = 2 or 3 (the jerk times come from f_mode) */
+    CMD_ERR_SHAPER = 8, /* cmd_shaper: cmd_shaper is not 0..5, or its design is refused (f_shaper, zeta_shaper, f_mode) */
+    CMD_ERR_SHAPER_N = 9, /* cmd_shaper_n: cmd_shaper = 4 and cmd_shaper_n is not 0..8 */
+    CMD_ERR_SHAPER_AMPLITUDE = 10, /* cmd_shaper_amplitude: cmd_shaper = 4: an amplitude is not finite, or they do not sum to 1 within 1e-09 */
+    CMD_ERR_SHAPER_DELAY = 11, /* cmd_shaper_delay: cmd_shaper = 4: a delay is negative, not finite, or beyond 4096 samples of Te (with shaper_source = 2: at the f_mode of the command) */
+    CMD_ERR_SHAPER_WHILE_MOVING = 12, /* cmd_shaper: another shaper than the one in force while the output is not at rest (done false, or v != 0): a shaper changes only from rest */
+    CMD_ERR_NO_MOTION = 13, /* target: no motion within the command's limits reaches target (too far for them, or longer than the FMU's horizon; a stop: no stop within DJL_MAX_PLAN_END samples): the planner's reason is logged */
+} djl_cmd_error;
 
 #ifdef DJL_VARS_TABLES
 /* Variable table: FMI 2 element value reference = vr + index (arrays). */
@@ -170,8 +215,19 @@ static const djl_var_info djl_var_table[] = {
     {65u, 'I', 'p', 1, "table_n"},
     {1000u, 'I', 'p', 256, "table_samples"},
     {2000u, 'R', 'p', 256, "table_jerk"},
+    {70u, 'R', 'i', 1, "cmd_v_max"},
+    {71u, 'R', 'i', 1, "cmd_a_max"},
+    {72u, 'R', 'i', 1, "cmd_d_max"},
+    {73u, 'E', 'i', 1, "cmd_profile"},
+    {500u, 'R', 'i', 4, "cmd_T_F"},
+    {74u, 'E', 'i', 1, "cmd_shaper"},
+    {75u, 'I', 'i', 1, "cmd_shaper_n"},
+    {600u, 'R', 'i', 8, "cmd_shaper_amplitude"},
+    {700u, 'R', 'i', 8, "cmd_shaper_delay"},
+    {76u, 'B', 'o', 1, "cmd_error"},
+    {77u, 'I', 'o', 1, "cmd_error_id"},
 };
-#define DJL_N_VARS 53
+#define DJL_N_VARS 64
 
 static const char *const djl_log_category_names[] = {
     "logEvents",
@@ -293,6 +349,8 @@ static const char *const djl_profile_names[] = {"", "AL", "JL", "DJL", "table"};
 static const char *const djl_short_stage_names[] = {"", "stretch", "overlap"};
 static const char *const djl_jerk_source_names[] = {"", "parameters", "f_mode", "f_mode_ahead"};
 static const char *const djl_shaper_names[] = {"none", "ZV", "ZVD", "EI", "custom"};
+static const char *const djl_cmd_profile_names[] = {"parameter", "AL", "JL", "DJL"};
+static const char *const djl_cmd_shaper_names[] = {"parameter", "ZV", "ZVD", "EI", "custom", "none"};
 static const char *const djl_shaper_source_names[] = {"", "f_shaper", "f_mode"};
 #endif /* DJL_VARS_PARAMETERS */
 

@@ -260,7 +260,10 @@ static fmi3Status access(fmi3Instance instance, const char *fn, int set, char ty
         for (e = 0; e < v.size; e++, j++) {
             double x = 0.0;
             if (set) {
-                if (io.l_in && (io.l_in[j] < INT32_MIN || io.l_in[j] > INT32_MAX)) {
+                /* (an input, cmd_profile or cmd_shaper, takes any value: saturated by the
+                 * model, refused at the command's edge, issue 34) */
+                if (io.l_in && v.causality != 'i' &&
+                    (io.l_in[j] < INT32_MIN || io.l_in[j] > INT32_MAX)) {
                     model_refuse(&s->m, "%s: %s = %lld is out of the range of the enumeration "
                                  "(nothing more was set)", fn, v.name, (long long)io.l_in[j]);
                     return fmi3Error;

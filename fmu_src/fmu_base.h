@@ -52,8 +52,9 @@ const char *model_state_name(int state);
 /* the data of an instance                                                  */
 
 #define MODEL_MAGIC 0x4a4c4446u /* "FDLJ" */
-#define MODEL_LAYOUT 8u          /* of model_data: a state of another layout is refused (8: the
-                                    replayed table, djl_table, and 264 plan steps) */
+#define MODEL_LAYOUT 9u          /* of model_data: a state of another layout is refused (8: the
+                                    replayed table, djl_table, and 264 plan steps; 9: the
+                                    per-command values and command errors, issue 34) */
 
 /* The figures of the parametric move planned at initialisation (the calculated
  * parameters motion_time, N_F1..N_F4, v_reached, a_reached, d_reached): commands
@@ -62,7 +63,32 @@ typedef struct {
     int64_t k_end;
     int32_t N[4];
     double v_reached, a_reached, d_reached;
+    double t_shaper;        /* s, the largest delay of the shaper of the parametric move */
 } plan_summary;
+
+/* The per-command inputs (issue 34, docs/generator.md "Per-command values"): as set, any
+ * value (checked at a command's edge). */
+typedef struct {
+    double v_max, a_max, d_max; /* cmd_v_max, cmd_a_max, cmd_d_max; 0: the default */
+    double T_F[4];              /* cmd_T_F[1..4]; 0: the default */
+    int32_t profile;            /* cmd_profile (0: the default) */
+    int32_t shaper;             /* cmd_shaper (0: the parameter's design, 5: none) */
+    int32_t shaper_n;           /* cmd_shaper_n (0: the parameters' custom design) */
+    int32_t pad;
+    double amplitude[DJL_MAX_SHAPER_IMPULSES]; /* cmd_shaper_amplitude */
+    double delay[DJL_MAX_SHAPER_IMPULSES];     /* cmd_shaper_delay, s */
+} model_cmd_inputs;
+
+/* The values of the move in progress, latched at its command (the parametric move: the
+ * parameters'): what a replan of it (jerk times from f_mode) and a stop without values of
+ * its own use. */
+typedef struct {
+    double v_max, a_max, d_max;
+    int32_t N[4];               /* jerk times of its stages, samples (all 0: AL) */
+    int32_t profile;            /* DJL_PROFILE_AL, _JL or _DJL (a table's commands: DJL) */
+    int32_t pad;
+    djl_shaper_params sp;       /* the design of its shaper (d->shaper is it, designed) */
+} model_move;
 
 /* All the data of an instance that an FMU state must capture: plain values, no
  * pointers, so an FMU state is a copy of it (packed: the shaper's rings hold only their
@@ -109,8 +135,17 @@ typedef struct {
     djl_table table;        /* parameters table_n, table_samples, table_jerk (profile = 4) */
     djl_shaper shaper;      /* designed with the plan (n = 0: no shaping) */
     int32_t shaper_cursor[DJL_MAX_SHAPER_IMPULSES]; /* piece hints of the delayed copies */
+    /* per-command values and command errors (issue 34) */
+    model_cmd_inputs cmd;   /* the inputs cmd_* */
+    model_move mv;          /* the values of the move in progress */
+    double env_v_max, env_a_max, env_d_max; /* the largest limits of every move since the
+                               start (the plan's own p limits: its pieces may hold parts of
+                               earlier moves) */
+    int32_t cmd_error;      /* output cmd_error, 0 or 1 */
+    int32_t cmd_error_id;   /* output cmd_error_id (spec.CMD_ERRORS), 0 without error */
     djl_shaper_memory mem;  /* what the delayed copies read of the plans replans replaced; the
-                               phase of f_mode (shaper_source = 2) */
+                               phase of f_mode (shaper_source = 2); the last field (a state
+                               packs the live entries of its rings only) */
 } model_data;
 
 /* The model's work space in an instance: not part of an FMU state. */

@@ -13,6 +13,7 @@
 #include "djl_math.h" /* floor, fmax, ... without libm (see there) */
 
 #include <float.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -308,6 +309,19 @@ static model_status ensure_plan(model_instance *m, const char *fn)
     d->first.v_reached = d->plan.v_reached;
     d->first.a_reached = d->plan.a_reached;
     d->first.d_reached = d->plan.d_reached;
+    d->first.t_shaper = d->shaper.n > 0 ? d->shaper.t_max : 0.0;
+    /* the move in progress is the parametric one: the parameters' values */
+    d->mv.v_max = d->p.v_max;
+    d->mv.a_max = d->p.a_max;
+    d->mv.d_max = d->p.d_max;
+    memcpy(d->mv.N, d->plan.N, sizeof d->mv.N);
+    d->mv.profile = d->p.profile == PROFILE_TABLE ? PROFILE_DJL : d->p.profile;
+    d->mv.sp = d->sp;
+    d->env_v_max = d->p.v_max;
+    d->env_a_max = d->p.a_max;
+    d->env_d_max = d->p.d_max;
+    d->cmd_error = 0;
+    d->cmd_error_id = 0;
     evaluate(d);
     log_plan(m);
     log_shaper(m);
@@ -320,11 +334,7 @@ static model_status set_input(model_instance *m, const model_var *v, double valu
 {
     model_data *d = &m->d;
     switch (v->base) {
-    case VR_TARGET:
-        if (!(djl_isfinite(value) && djl_fabs(value) <= DJL_MAX_POSITION))
-            return model_refuse(m, "set: invalid input target = %g m: must be finite and "
-                                "|target| <= %g m (the previous value, %g m, is kept)", value,
-                                DJL_MAX_POSITION, d->target);
+    case VR_TARGET: /* any value: a command to a bad one is refused at its edge (cmd_error) */
         d->target = value;
         return ST_OK;
     case VR_F_MODE:
@@ -358,6 +368,23 @@ static model_status set_input(model_instance *m, const model_var *v, double valu
         return ST_OK;
     case VR_EXECUTE: d->execute = value != 0.0; return ST_OK;
     case VR_STOP: d->stop = value != 0.0; return ST_OK;
+    default: break;
+    }
+    /* the per-command values: any value is kept, a command checks those it uses at its
+     * edge (an invalid one: cmd_error, the command refused, the simulation goes on); an
+     * integer beyond 32 bits (an FMI 3 Int64) is kept saturated, invalid all the same */
+    if (v->type == 'I') value = value < -2147483648.0 ? -2147483648.0
+                                : value > 2147483647.0 ? 2147483647.0 : value;
+    switch (v->base) {
+    case VR_CMD_V_MAX: d->cmd.v_max = value; return ST_OK;
+    case VR_CMD_A_MAX: d->cmd.a_max = value; return ST_OK;
+    case VR_CMD_D_MAX: d->cmd.d_max = value; return ST_OK;
+    case VR_CMD_T_F: d->cmd.T_F[v->index] = value; return ST_OK;
+    case VR_CMD_PROFILE: d->cmd.profile = (int32_t)value; return ST_OK;
+    case VR_CMD_SHAPER: d->cmd.shaper = (int32_t)value; return ST_OK;
+    case VR_CMD_SHAPER_N: d->cmd.shaper_n = (int32_t)value; return ST_OK;
+    case VR_CMD_SHAPER_AMPLITUDE: d->cmd.amplitude[v->index] = value; return ST_OK;
+    case VR_CMD_SHAPER_DELAY: d->cmd.delay[v->index] = value; return ST_OK;
     default: return model_fail(m, "set: internal error, no storage for input %s", v->name);
     }
 }
@@ -449,7 +476,17 @@ model_status model_get(model_instance *m, unsigned int vr, char type, double *va
         case VR_TARGET: *value = d->target; break;
         case VR_F_MODE: *value = d->f_mode; break;
         case VR_EXECUTE: *value = d->execute; break;
-        default: *value = d->stop; break;
+        case VR_STOP: *value = d->stop; break;
+        case VR_CMD_V_MAX: *value = d->cmd.v_max; break;
+        case VR_CMD_A_MAX: *value = d->cmd.a_max; break;
+        case VR_CMD_D_MAX: *value = d->cmd.d_max; break;
+        case VR_CMD_T_F: *value = d->cmd.T_F[v.index]; break;
+        case VR_CMD_PROFILE: *value = (double)d->cmd.profile; break;
+        case VR_CMD_SHAPER: *value = (double)d->cmd.shaper; break;
+        case VR_CMD_SHAPER_N: *value = (double)d->cmd.shaper_n; break;
+        case VR_CMD_SHAPER_AMPLITUDE: *value = d->cmd.amplitude[v.index]; break;
+        case VR_CMD_SHAPER_DELAY: *value = d->cmd.delay[v.index]; break;
+        default: return model_fail(m, "get: internal error, no value for input %s", v.name);
         }
         return ST_OK;
     }
@@ -476,9 +513,10 @@ model_status model_get(model_instance *m, unsigned int vr, char type, double *va
     case VR_SEGMENT: *value = (double)d->out.segment; break;
     case VR_BUSY: *value = d->out.done ? 0.0 : 1.0; break;
     case VR_STAGE: *value = (double)d->out.stage; break;
-    case VR_MOTION_TIME: /* with a shaper: until its last delayed copy ends */
+    case VR_MOTION_TIME: /* with a shaper: until its last delayed copy ends (the shaper of
+                            the parametric move: a calculated parameter is fixed) */
         *value = (double)d->first.k_end * d->p.Te;
-        if (d->shaper.n > 0) *value += d->shaper.t_max;
+        if (d->first.t_shaper != 0.0) *value += d->first.t_shaper;
         break;
     case VR_N_F1: *value = (double)d->first.N[0]; break;
     case VR_N_F2: *value = (double)d->first.N[1]; break;
@@ -487,6 +525,8 @@ model_status model_get(model_instance *m, unsigned int vr, char type, double *va
     case VR_V_REACHED: *value = d->first.v_reached; break;
     case VR_A_REACHED: *value = d->first.a_reached; break;
     case VR_D_REACHED: *value = d->first.d_reached; break;
+    case VR_CMD_ERROR: *value = d->cmd_error ? 1.0 : 0.0; break;
+    case VR_CMD_ERROR_ID: *value = (double)d->cmd_error_id; break;
     default: return model_fail(m, "get: internal error, no value for %s", v.name);
     }
     return ST_OK;
@@ -579,19 +619,45 @@ static djl_status replan_try(model_instance *m, double u, const djl_goal *g,
     return st;
 }
 
+/* A command (an execute or stop edge) refused: the output cmd_error set with its code
+ * (spec.CMD_ERRORS, docs/generator.md "Command errors"), the reason logged as a warning;
+ * the move in progress and everything else untouched.  Returns ST_DISCARD, which the
+ * caller takes for "refused, go on" (DoStep itself returns OK). */
+static model_status command_refused(model_instance *m, int code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+static model_status command_refused(model_instance *m, int code, const char *fmt, ...)
+{
+    char buf[768];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(buf, sizeof buf, fmt, ap);
+    va_end(ap);
+    m->d.cmd_error = 1;
+    m->d.cmd_error_id = code;
+    model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING, "%s: command refused (cmd_error = true, "
+              "cmd_error_id = %d); the move in progress goes on unchanged", buf, code);
+    return ST_DISCARD;
+}
+
 /* The plan replaced by djl_replan at u (samples of the current plan), towards g; *origin:
- * the sample of the current plan the new one starts at (0: a stop kept the move). */
+ * the sample of the current plan the new one starts at (0: a stop kept the move), *kept:
+ * a stop kept the move.  No motion: the command refused (ST_DISCARD, cmd_error). */
 static model_status replan_at(model_instance *m, double t, double u, const djl_goal *g,
-                              const char *why, int64_t *origin)
+                              const char *why, int64_t *origin, int *kept)
 {
     model_data *d = &m->d;
     djl_replan_info info;
     djl_error err;
     djl_status st = replan_try(m, u, g, &info, &err);
     if (st != DJL_OK)
-        return model_refuse(m, "DoStep at t = %.17g s: %s: %s: %s (nothing was done)", t, why,
-                            djl_status_name(st), err.message);
+        return command_refused(m, CMD_ERR_NO_MOTION, "DoStep at t = %.17g s: %s to target = "
+                               "%.17g m: %s: %s", t, why, g->target, djl_status_name(st),
+                               err.message);
     *origin = info.origin;
+    *kept = info.kept;
     if (info.kept) {
         model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
                   "t = %.17g s: stop: with the jerk times %d/%d/%d/%d samples it would rest "
@@ -610,7 +676,7 @@ static model_status replan_at(model_instance *m, double t, double u, const djl_g
  * needs a stop first whatever the jerk times) those of the plan in progress, without
  * the terms.  Landing wins over the rule (docs/generator.md, "Commanded moves"). */
 static model_status command_from_f_mode(model_instance *m, double t, double u, djl_goal *g,
-                                        const char *why, int64_t *origin)
+                                        const char *why, int64_t *origin, int *kept)
 {
     model_data *d = &m->d;
     djl_replan_info info;
@@ -625,8 +691,9 @@ static model_status command_from_f_mode(model_instance *m, double t, double u, d
         return ST_OK;
     }
     if (st != DJL_E_INFEASIBLE)
-        return model_refuse(m, "DoStep at t = %.17g s: %s: %s: %s (nothing was done)", t, why,
-                            djl_status_name(st), err.message);
+        return command_refused(m, CMD_ERR_NO_MOTION, "DoStep at t = %.17g s: %s to target = "
+                               "%.17g m: %s: %s", t, why, g->target, djl_status_name(st),
+                               err.message);
     for (i = 0; i < 4; i++) same &= g->N[i] == d->plan.N[i] || d->plan.N[i] <= 0;
     if (!same) {
         model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
@@ -642,11 +709,12 @@ static model_status command_from_f_mode(model_instance *m, double t, double u, d
             return ST_OK;
         }
         if (st != DJL_E_INFEASIBLE)
-            return model_refuse(m, "DoStep at t = %.17g s: %s: %s: %s (nothing was done)", t,
-                                why, djl_status_name(st), err.message);
+            return command_refused(m, CMD_ERR_NO_MOTION, "DoStep at t = %.17g s: %s to target "
+                                   "= %.17g m: %s: %s", t, why, g->target,
+                                   djl_status_name(st), err.message);
     }
     g->no_stop_first = 0;
-    return replan_at(m, t, u, g, why, origin);
+    return replan_at(m, t, u, g, why, origin, kept);
 }
 
 /* A stop while the move in progress only slows down to rest (no step ahead but
@@ -704,6 +772,199 @@ static void predicted_jerk_times(const model_data *d, double u0, int32_t N[4])
     }
 }
 
+/* ------------------------------------------------------------------------ */
+/* per-command values (issue 34, docs/generator.md "Per-command values")    */
+
+/* The values a command (an execute or stop edge) runs with, its inputs resolved. */
+typedef struct {
+    double v_max, a_max, d_max;
+    int32_t N[4];
+    int32_t profile;
+    int switch_shaper;        /* an execute with another shaper than the one in force */
+    djl_shaper_params sp;     /* its shaper's design (an execute) */
+    djl_shaper sh;            /* designed, when switch_shaper */
+} command_values;
+
+/* A jerk time T (s) in samples of Te, round(T/Te) as the planner takes it; 0 if it is not
+ * one the FMU takes (not finite, <= 0, or outside 1..DJL_MAX_FILTER_SAMPLES samples). */
+static int32_t jerk_time_samples(double T, double Te)
+{
+    double r;
+    if (!(djl_isfinite(T) && T > 0.0)) return 0;
+    r = djl_floor(T / Te + 0.5);
+    if (!(r >= 1.0 && r <= (double)DJL_MAX_FILTER_SAMPLES)) return 0;
+    return (int32_t)r;
+}
+
+static int same_shaper_params(const djl_shaper_params *a, const djl_shaper_params *b)
+{
+    return a->kind == b->kind && a->source == b->source &&
+           memcmp(&a->f, &b->f, sizeof a->f) == 0 && memcmp(&a->zeta, &b->zeta, sizeof a->zeta) == 0 &&
+           a->n == b->n && memcmp(a->amplitude, b->amplitude, sizeof a->amplitude) == 0 &&
+           memcmp(a->delay, b->delay, sizeof a->delay) == 0;
+}
+
+/* The values of a command at t (stop: a stop edge, else an execute edge), Nf the jerk
+ * times of f_mode (jerk_source 2, 3): ST_OK, or refused (ST_DISCARD, cmd_error set and
+ * logged, naming the input and its value).  Nothing else changes. */
+static model_status command_values_of(model_instance *m, double t, int stop, const int32_t Nf[4],
+                                      command_values *cv)
+{
+    const model_data *d = &m->d;
+    const model_cmd_inputs *c = &d->cmd;
+    const char *what = stop ? "stop" : "execute";
+    static const char *const lim_name[3] = {"cmd_v_max", "cmd_a_max", "cmd_d_max"};
+    static const char *const lim_unit[3] = {"m/s", "m/s2", "m/s2"};
+    double lim[3], Te = d->p.Te;
+    int i, any_T = 0;
+    memset(cv, 0, sizeof *cv);
+    if (!stop && !(djl_isfinite(d->target) && djl_fabs(d->target) <= DJL_MAX_POSITION))
+        return command_refused(m, CMD_ERR_TARGET, "DoStep at t = %.17g s: execute: invalid "
+                               "target = %g m: must be finite and |target| <= %g m", t,
+                               d->target, DJL_MAX_POSITION);
+    lim[0] = c->v_max;
+    lim[1] = c->a_max;
+    lim[2] = c->d_max;
+    for (i = 0; i < 3; i++)
+        if (!(lim[i] == 0.0 || (djl_isfinite(lim[i]) && lim[i] > 0.0)))
+            return command_refused(m, CMD_ERR_V_MAX + i, "DoStep at t = %.17g s: %s: invalid "
+                                   "%s = %g %s: must be 0 (%s) or a finite number > 0", t, what,
+                                   lim_name[i], lim[i], lim_unit[i],
+                                   stop ? "the stopped move's" : "the parameter's");
+    cv->v_max = c->v_max > 0.0 ? c->v_max : stop ? d->mv.v_max : d->p.v_max;
+    cv->a_max = c->a_max > 0.0 ? c->a_max : stop ? d->mv.a_max : d->p.a_max;
+    cv->d_max = c->d_max > 0.0 ? c->d_max : stop ? d->mv.d_max : d->p.d_max;
+    if (c->profile < CMD_PROFILE_PARAMETER || c->profile > CMD_PROFILE_DJL)
+        return command_refused(m, CMD_ERR_PROFILE, "DoStep at t = %.17g s: %s: invalid "
+                               "cmd_profile = %d: must be 0 (%s), 1 (AL), 2 (JL) or 3 (DJL)", t,
+                               what, (int)c->profile,
+                               stop ? "the stopped move's" : "the parameter's");
+    for (i = 0; i < 4; i++) {
+        if (c->T_F[i] == 0.0) continue;
+        any_T = 1;
+        if (jerk_time_samples(c->T_F[i], Te) == 0)
+            return command_refused(m, CMD_ERR_T_F, "DoStep at t = %.17g s: %s: invalid "
+                                   "cmd_T_F[%d] = %g s: must be 0 (%s) or a jerk time of 1..%d "
+                                   "samples of Te = %g s", t, what, i + 1, c->T_F[i],
+                                   stop ? "the stopped move's" : "the parameter T_F",
+                                   DJL_MAX_FILTER_SAMPLES, Te);
+    }
+    if (d->jerk_source >= JERK_SOURCE_F_MODE) {
+        if (c->profile != CMD_PROFILE_PARAMETER || any_T)
+            return command_refused(m, CMD_ERR_JERK_WITH_F_MODE, "DoStep at t = %.17g s: %s: "
+                                   "cmd_profile = %d and cmd_T_F = [%g, %g, %g, %g] s: with "
+                                   "jerk_source = %d the jerk times come from f_mode (leave "
+                                   "them 0)", t, what, (int)c->profile, c->T_F[0], c->T_F[1],
+                                   c->T_F[2], c->T_F[3], (int)d->jerk_source);
+        memcpy(cv->N, Nf, sizeof cv->N);
+        cv->profile = d->mv.profile;
+    } else if (c->profile == CMD_PROFILE_PARAMETER && !any_T) {
+        /* today's values: the parametric move's jerk times (a stop: the stopped move's) */
+        memcpy(cv->N, stop ? d->mv.N : d->first.N, sizeof cv->N);
+        cv->profile = stop ? d->mv.profile
+                           : d->p.profile == PROFILE_TABLE ? PROFILE_DJL : d->p.profile;
+    } else {
+        int32_t base[4];
+        cv->profile = c->profile != CMD_PROFILE_PARAMETER ? c->profile
+                      : stop ? d->mv.profile
+                      : d->p.profile == PROFILE_TABLE ? PROFILE_DJL : d->p.profile;
+        for (i = 0; i < 4; i++) {
+            /* the stage's own value: cmd_T_F[i], else the stopped move's, else T_Fi */
+            base[i] = c->T_F[i] != 0.0 ? jerk_time_samples(c->T_F[i], Te)
+                      : stop && d->mv.N[i] > 0 ? d->mv.N[i]
+                      : jerk_time_samples(d->p.T_F[i], Te);
+        }
+        for (i = 0; i < 4; i++) {
+            int src = cv->profile == PROFILE_JL ? 0 : i;
+            cv->N[i] = cv->profile == PROFILE_AL ? 0 : base[src];
+            if (cv->profile != PROFILE_AL && cv->N[i] == 0)
+                return command_refused(m, CMD_ERR_T_F, "DoStep at t = %.17g s: %s: cmd_T_F[%d] "
+                                       "= 0 takes the parameter T_F%d = %g s, which is not a "
+                                       "jerk time of 1..%d samples of Te = %g s", t, what,
+                                       src + 1, src + 1, d->p.T_F[src],
+                                       DJL_MAX_FILTER_SAMPLES, Te);
+        }
+    }
+    cv->sp = d->mv.sp;
+    if (stop) return ST_OK; /* a stop keeps the move's shaper */
+    if (c->shaper < CMD_SHAPER_PARAMETER || c->shaper > CMD_SHAPER_NONE)
+        return command_refused(m, CMD_ERR_SHAPER, "DoStep at t = %.17g s: execute: invalid "
+                               "cmd_shaper = %d: must be 0 (the parameter's), 1 (ZV), 2 (ZVD), "
+                               "3 (EI), 4 (custom) or 5 (none)", t, (int)c->shaper);
+    cv->sp = d->sp;
+    if (c->shaper == CMD_SHAPER_NONE) {
+        cv->sp.kind = DJL_SHAPER_NONE;
+    } else if (c->shaper != CMD_SHAPER_PARAMETER) {
+        cv->sp.kind = c->shaper;
+        if (c->shaper == CMD_SHAPER_CUSTOM) {
+            if (c->shaper_n < 0 || c->shaper_n > DJL_MAX_SHAPER_IMPULSES)
+                return command_refused(m, CMD_ERR_SHAPER_N, "DoStep at t = %.17g s: execute: "
+                                       "invalid cmd_shaper_n = %d: a custom shaper has 1..%d "
+                                       "impulses (0: the parameters' custom design)", t,
+                                       (int)c->shaper_n, DJL_MAX_SHAPER_IMPULSES);
+            if (c->shaper_n > 0) {
+                cv->sp.n = c->shaper_n;
+                memcpy(cv->sp.amplitude, c->amplitude, sizeof cv->sp.amplitude);
+                memcpy(cv->sp.delay, c->delay, sizeof cv->sp.delay);
+            }
+        }
+    }
+    if (!same_shaper_params(&cv->sp, &d->mv.sp)) {
+        djl_error err;
+        int from_cmd = c->shaper == CMD_SHAPER_CUSTOM && c->shaper_n > 0, code = CMD_ERR_SHAPER;
+        if (djl_shaper_design(&cv->sp, Te, d->f_mode, &cv->sh, &err) != DJL_OK) {
+            if (strncmp(err.param, "shaper_amplitude", 16) == 0)
+                code = CMD_ERR_SHAPER_AMPLITUDE;
+            else if (strncmp(err.param, "shaper_delay", 12) == 0 || strcmp(err.param, "f_mode") == 0)
+                code = CMD_ERR_SHAPER_DELAY;
+            else if (strcmp(err.param, "shaper_n") == 0)
+                code = CMD_ERR_SHAPER_N;
+            return command_refused(m, code, "DoStep at t = %.17g s: execute: invalid shaper "
+                                   "of cmd_shaper = %d%s: %s%s", t, (int)c->shaper,
+                                   from_cmd ? " (cmd_shaper_n, cmd_shaper_amplitude, "
+                                              "cmd_shaper_delay)" : "",
+                                   from_cmd && strncmp(err.message, "shaper_", 7) == 0 ? "cmd_" : "",
+                                   err.message);
+        }
+        if (!(d->out.done && d->out.v == 0.0))
+            return command_refused(m, CMD_ERR_SHAPER_WHILE_MOVING, "DoStep at t = %.17g s: "
+                                   "execute: cmd_shaper = %d gives another shaper (%s) than the "
+                                   "one in force (%s) while the output is not at rest (done = "
+                                   "%d, v = %g m/s): another shaper starts from rest", t,
+                                   (int)c->shaper, djl_shaper_names[cv->sp.kind],
+                                   djl_shaper_names[d->mv.sp.kind], (int)d->out.done, d->out.v);
+        cv->switch_shaper = 1;
+    }
+    return ST_OK;
+}
+
+/* A command done: its values become those of the move in progress (a stop: the shaper
+ * stays), the limits' envelope grows, the error is cleared; an execute with another
+ * shaper takes it from here (at rest: its copies of the time before read the rest). */
+static void command_latched(model_instance *m, int stop, const command_values *cv)
+{
+    model_data *d = &m->d;
+    d->mv.v_max = cv->v_max;
+    d->mv.a_max = cv->a_max;
+    d->mv.d_max = cv->d_max;
+    memcpy(d->mv.N, cv->N, sizeof d->mv.N);
+    d->mv.profile = cv->profile;
+    d->env_v_max = djl_fmax(d->env_v_max, cv->v_max);
+    d->env_a_max = djl_fmax(d->env_a_max, cv->a_max);
+    d->env_d_max = djl_fmax(d->env_d_max, cv->d_max);
+    d->cmd_error = 0;
+    d->cmd_error_id = 0;
+    if (stop || !cv->switch_shaper) return;
+    d->mv.sp = cv->sp;
+    d->shaper = cv->sh;
+    memset(d->shaper_cursor, 0, sizeof d->shaper_cursor);
+    djl_shaper_memory_clear(&d->mem);
+    if (cv->sh.n > 0 && cv->sh.source == DJL_SHAPER_SOURCE_F_MODE)
+        djl_shaper_phase_rate(&d->mem, (double)d->n + d->phase, d->f_mode * d->p.Te);
+    model_log(m, ST_OK, DJL_LOG_LOGEVENTS, "execute: input shaper %s from here (cmd_shaper = "
+              "%d)", djl_shaper_names[cv->sp.kind], (int)d->cmd.shaper);
+}
+
 /* The commands read at a DoStep (t, plan time u0, the step covering du samples):
  * edges of stop and execute, then with jerk_source = 2 the jerk times of the
  * stages that start within the step from f_mode. */
@@ -741,30 +1002,59 @@ static model_status commands(model_instance *m, double t, double u0, double du)
             predicted_jerk_times(d, u0, g.N);
         }
     } else {
-        memcpy(g.N, d->first.N, sizeof g.N);
+        memcpy(g.N, d->mv.N, sizeof g.N);
     }
-    if (stop_edge && stop_kept(m, t, u0, &g)) {
-        d->goal = DJL_GOAL_STOP;
-        d->goal_target = d->target;
-    } else if (stop_edge || exec_edge) {
-        model_status st;
-        int64_t origin = 0;
+    if (stop_edge || exec_edge) {
+        command_values cv;
         djl_goal gc = g;
-        gc.kind = stop_edge ? DJL_GOAL_STOP : DJL_GOAL_TARGET;
-        gc.target = d->target;
-        if (d->jerk_source >= JERK_SOURCE_F_MODE)
-            st = command_from_f_mode(m, t, u0, &gc, stop_edge ? "stop" : "execute", &origin);
-        else
-            st = replan_at(m, t, u0, &gc, stop_edge ? "stop" : "execute", &origin);
-        if (st != ST_OK) return st;
-        d->goal = gc.kind;
-        d->goal_target = d->target;
-        u0 -= (double)origin;
-        u_end = u0 + du;
+        model_status st = command_values_of(m, t, stop_edge, g.N, &cv);
+        /* (a target that is not a position is kept out of the state's goal) */
+        double goal_target = djl_isfinite(d->target) && djl_fabs(d->target) <= DJL_MAX_POSITION
+                                 ? d->target : d->goal_target;
+        memcpy(gc.N, cv.N, sizeof gc.N);
+        gc.v_max = cv.v_max;
+        gc.a_max = cv.a_max;
+        gc.d_max = cv.d_max;
+        if (st != ST_OK) {
+            /* refused: cmd_error set; the edges are taken, nothing else changes */
+        } else if (stop_edge && stop_kept(m, t, u0, &gc)) {
+            d->goal = DJL_GOAL_STOP;
+            d->goal_target = goal_target;
+            d->cmd_error = 0;
+            d->cmd_error_id = 0;
+        } else {
+            int64_t origin = 0;
+            int kept = 0;
+            gc.kind = stop_edge ? DJL_GOAL_STOP : DJL_GOAL_TARGET;
+            gc.target = d->target;
+            if (d->jerk_source >= JERK_SOURCE_F_MODE)
+                st = command_from_f_mode(m, t, u0, &gc, stop_edge ? "stop" : "execute", &origin,
+                                         &kept);
+            else
+                st = replan_at(m, t, u0, &gc, stop_edge ? "stop" : "execute", &origin, &kept);
+            if (st == ST_OK) {
+                d->goal = gc.kind;
+                d->goal_target = goal_target;
+                if (kept) { /* a stop that keeps the move: the move's values stay */
+                    d->cmd_error = 0;
+                    d->cmd_error_id = 0;
+                } else {
+                    command_latched(m, stop_edge, &cv);
+                }
+                u0 -= (double)origin;
+                u_end = u0 + du;
+            } else if (st != ST_DISCARD) {
+                return st;
+            }
+        }
     }
     d->stop_seen = d->stop;
     d->execute_seen = d->execute;
     if (d->jerk_source < JERK_SOURCE_F_MODE) return ST_OK;
+    /* the move's limits (latched at its command) */
+    g.v_max = d->mv.v_max;
+    g.a_max = d->mv.a_max;
+    g.d_max = d->mv.d_max;
     /* jerk times from f_mode: a stage that starts within the step with another jerk
      * time is replanned as it starts; while cruising or speeding up, the stages to
      * come are replanned at once (a stop or the landing then falls on the right
@@ -1010,9 +1300,12 @@ const char *model_state_flaw(const model_data *d)
         return "f_mode's rate of change is not finite";
     if ((d->execute | d->stop | d->execute_seen | d->stop_seen) & ~1)
         return "a Boolean input is neither 0 nor 1";
-    if (!(djl_isfinite(d->target) && djl_fabs(d->target) <= DJL_MAX_POSITION))
-        return "the input target is out of range";
+    /* (the inputs target and cmd_* take any value: a command checks them at its edge) */
     if (!(djl_isfinite(d->f_mode) && d->f_mode > 0.0)) return "the input f_mode is not > 0";
+    if (d->cmd_error != 0 && d->cmd_error != 1) return "cmd_error is neither 0 nor 1";
+    if (d->cmd_error_id < 0 || d->cmd_error_id > CMD_ERR_NO_MOTION ||
+        (d->cmd_error_id != 0) != (d->cmd_error != 0))
+        return "cmd_error_id is not a code of cmd_error";
     if (!d->planned) return NULL; /* the plan is rebuilt before any use */
     if ((d->state & (MS_STEP | MS_TERMINATED)) && !(d->f_seen > 0.0))
         return "the f_mode last seen is not > 0"; /* an f_mode accepted (model_start) */
@@ -1022,13 +1315,6 @@ const char *model_state_flaw(const model_data *d)
     if (!(djl_isfinite(d->goal_target) && djl_fabs(d->goal_target) <= DJL_MAX_POSITION))
         return "the target of the move is out of range";
     if (d->replans < 0) return "the replan count is negative";
-    if (d->first.k_end < 0 || d->first.k_end > DJL_MAX_MOTION_SAMPLES ||
-        !djl_isfinite(d->first.v_reached) || !djl_isfinite(d->first.a_reached) ||
-        !djl_isfinite(d->first.d_reached))
-        return "the figures of the parametric move are out of range";
-    for (i = 0; i < 4; i++)
-        if (d->first.N[i] < 0 || d->first.N[i] > DJL_MAX_FILTER_SAMPLES)
-            return "a jerk time of the parametric move is out of range";
     if (pl->replanned != 0 && pl->replanned != 1) return "the replanned flag is neither 0 nor 1";
     if (!pl->replanned && d->jerk_source == JERK_SOURCE_PARAMETERS && !same_params(&d->p, &pl->p))
         return "its plan was not made from its parameters";
@@ -1041,13 +1327,42 @@ const char *model_state_flaw(const model_data *d)
         if (!pl->replanned && (why = djl_table_plan_flaw(pl, &d->p, &d->table)) != NULL)
             return why;
     }
+    /* the move in progress: limits within the envelope of every move's (the parameters'
+     * included), jerk times in range, its shaper's design checked below */
+    {
+        double mv[6];
+        mv[0] = d->mv.v_max; mv[1] = d->mv.a_max; mv[2] = d->mv.d_max;
+        mv[3] = d->env_v_max; mv[4] = d->env_a_max; mv[5] = d->env_d_max;
+        if (!finite_all(mv, 6) || !(mv[0] > 0.0 && mv[1] > 0.0 && mv[2] > 0.0) ||
+            mv[0] > mv[3] || mv[1] > mv[4] || mv[2] > mv[5] || mv[3] < d->p.v_max ||
+            mv[4] < d->p.a_max || mv[5] < d->p.d_max)
+            return "the limits of the move in progress are out of range";
+        if (d->mv.profile < DJL_PROFILE_AL || d->mv.profile > DJL_PROFILE_DJL)
+            return "the profile of the move in progress is unknown";
+        for (i = 0; i < 4; i++)
+            if (d->mv.N[i] < 0 || d->mv.N[i] > DJL_MAX_FILTER_SAMPLES)
+                return "a jerk time of the move in progress is out of range";
+        if (!pl->replanned && (memcmp(&d->env_v_max, &d->p.v_max, sizeof(double)) != 0 ||
+                               memcmp(&d->env_a_max, &d->p.a_max, sizeof(double)) != 0 ||
+                               memcmp(&d->env_d_max, &d->p.d_max, sizeof(double)) != 0))
+            return "the limits of a plan not replanned are not the parameters'";
+        if (!djl_isfinite(d->first.t_shaper) || d->first.t_shaper < 0.0)
+            return "the shaper delay of the parametric move is out of range";
+    }
+    if (d->first.k_end < 0 || d->first.k_end > DJL_MAX_MOTION_SAMPLES ||
+        !djl_isfinite(d->first.v_reached) || !djl_isfinite(d->first.a_reached) ||
+        !djl_isfinite(d->first.d_reached))
+        return "the figures of the parametric move are out of range";
+    for (i = 0; i < 4; i++)
+        if (d->first.N[i] < 0 || d->first.N[i] > DJL_MAX_FILTER_SAMPLES)
+            return "a jerk time of the parametric move is out of range";
     if (pl->replanned || d->jerk_source >= JERK_SOURCE_F_MODE) {
         /* a plan of its own (a replan, or jerk times from f_mode): sound values */
         double v[7];
         v[0] = pl->p.Te; v[1] = pl->p.x0; v[2] = pl->p.v0; v[3] = pl->p.v_max;
         v[4] = pl->p.a_max; v[5] = pl->p.d_max; v[6] = pl->p.distance;
-        if (!finite_all(v, 7) || pl->p.Te != d->p.Te || pl->p.v_max != d->p.v_max ||
-            pl->p.a_max != d->p.a_max || pl->p.d_max != d->p.d_max ||
+        if (!finite_all(v, 7) || pl->p.Te != d->p.Te || pl->p.v_max != d->env_v_max ||
+            pl->p.a_max != d->env_a_max || pl->p.d_max != d->env_d_max ||
             djl_fabs(pl->p.x0) > DJL_MAX_POSITION || djl_fabs(pl->p.v0) > pl->p.v_max)
             return "its plan's parameters are not those of the FMU";
     }
@@ -1139,7 +1454,7 @@ const char *model_state_flaw(const model_data *d)
     /* the shaper is the one of its parameters, its memory sound */
     {
         djl_shaper sh;
-        if (djl_shaper_design(&d->sp, d->p.Te, d->shaper.f_design, &sh, NULL) != DJL_OK)
+        if (djl_shaper_design(&d->mv.sp, d->p.Te, d->shaper.f_design, &sh, NULL) != DJL_OK)
             return "its shaper's parameters are invalid";
         if (memcmp(&sh, &d->shaper, sizeof sh) != 0)
             return "its shaper is not the one of its parameters";

@@ -121,7 +121,8 @@ def test_parameter_table_is_the_spec():
 def test_enumeration_constants_are_the_spec():
     header = (fmu_src_dir() / "djl_vars.h").read_text()
     stems = {"Profile": "PROFILE", "ShortStage": "SHORT_STAGE", "JerkSource": "JERK_SOURCE",
-             "Shaper": "SHAPER", "ShaperSource": "SHAPER_SOURCE"}
+             "Shaper": "SHAPER", "ShaperSource": "SHAPER_SOURCE",
+             "CmdProfile": "CMD_PROFILE", "CmdShaper": "CMD_SHAPER"}
     assert set(stems) == set(spec.ENUMERATIONS)
     for name, items in spec.ENUMERATIONS.items():
         for item, value, _ in items:
@@ -133,6 +134,30 @@ def test_enumeration_constants_are_the_spec():
     assert "(int)PROFILE_DJL == (int)DJL_PROFILE_DJL" in header
     assert "(int)SHAPER_CUSTOM == (int)DJL_SHAPER_CUSTOM" in header
     assert "(int)SHAPER_SOURCE_F_MODE == (int)DJL_SHAPER_SOURCE_F_MODE" in header
+
+
+def test_command_enumerations_share_the_codes_of_the_parameters():
+    """cmd_profile and cmd_shaper: 0 is the parameter's value, the other codes are those of
+    profile and shaper (cmd_shaper adds 5 = none, since 0 means the parameter's)."""
+    for cmd, par in (("CmdProfile", "Profile"), ("CmdShaper", "Shaper")):
+        codes = {n: v for n, v, _ in spec.ENUMERATIONS[cmd]}
+        assert codes.pop("parameter") == 0
+        pcodes = {n: v for n, v, _ in spec.ENUMERATIONS[par]}
+        for name, value in codes.items():
+            assert name == "none" and value == max(pcodes.values()) + 1 or pcodes[name] == value
+    assert "table" not in {n for n, _, _ in spec.ENUMERATIONS["CmdProfile"]}
+
+
+def test_command_error_codes_are_in_the_header_and_the_docs(root):
+    """Every code of cmd_error_id: in djl_vars.h (CMD_ERR_<name>) and in the one table of
+    docs/generator.md, with its meaning; consecutive from 1."""
+    header = (fmu_src_dir() / "djl_vars.h").read_text()
+    doc = (root / "docs" / "generator.md").read_text()
+    assert [c for c, *_ in spec.CMD_ERRORS] == list(range(1, len(spec.CMD_ERRORS) + 1))
+    assert spec.BY_NAME["cmd_error_id"].max == len(spec.CMD_ERRORS)
+    for code, name, what, _ in spec.CMD_ERRORS:
+        assert f"    CMD_ERR_{name} = {code}," in header
+        assert re.search(rf"^\| {code} \| `{what}`", doc, re.M), (code, what)
 
 
 def test_profile_codes_are_derived_from_the_enumeration():

@@ -10,7 +10,8 @@ issue #12 and elementary kinematics (tests/_command_checks.py), never against th
    with j and done, stops come to rest and stay there;
 2. with the new inputs untouched, or set to their start values, the outputs are bit for bit
    those of the FMU before the interface existed (hashes recorded from 8f30fb7);
-3. bad input values are refused by name and change nothing;
+3. bad input values are refused by name and change nothing (a bad target: taken, its
+   command refused with cmd_error, tests/test_fmu_cmd.py);
 4. FMU states taken in the middle of a commanded move replay bit for bit;
 5. jerk_source = 2: each stage lasts round(1/(f_mode Te)) samples for the f_mode of its start.
 
@@ -625,7 +626,6 @@ def test_inert_inputs_change_no_output(fmu, case):
 # ---------------------------------------------------------------- 3. bad inputs
 
 
-BAD_TARGETS = [math.nan, math.inf, -math.inf, 1e301, -1e301]
 BAD_F_MODES = [math.nan, 0.0, -0.0, -1.0, math.inf, -math.inf]
 
 
@@ -666,17 +666,8 @@ def _scripted(drv: Driver, bad: tuple[str, float] | None, at: int,
     return msgs
 
 
-@pytest.mark.parametrize("value", BAD_TARGETS, ids=str)
-def test_bad_target_in_step_mode_is_refused_and_changes_nothing(fmu, value):
-    with GeneratorFMU(fmu) as g:
-        ref = Driver(g, _cmd_axis())
-        _scripted(ref, None, 120)
-        ref_rows = ref.rec.rows()
-        drv = Driver(g, _cmd_axis())
-        msgs = _scripted(drv, ("target", value), 120)
-        assert "target" in msgs[0]
-        assert np.array_equal(drv.rec.rows(), ref_rows)
-        check_all(drv)
+# A bad target (NaN, infinite, beyond 1e300 m) is taken when set since issue 34; the
+# execute that would use it is refused at its edge with cmd_error: tests/test_fmu_cmd.py.
 
 
 @pytest.mark.parametrize("js", [1, 2])
@@ -762,19 +753,6 @@ class _BadInitDriver(Driver):
 
 def _same_float(a: Any, b: float) -> bool:
     return isinstance(a, float) and (a == b or (a != a and b != b))
-
-
-@pytest.mark.parametrize("mode", ["instantiated", "initialization"])
-@pytest.mark.parametrize("value", BAD_TARGETS, ids=str)
-def test_bad_target_before_step_mode_is_refused(fmu, mode, value):
-    with GeneratorFMU(fmu) as g:
-        ref = Driver(g, _cmd_axis())
-        _scripted(ref, None, 120)
-        drv = _BadInitDriver(g, _cmd_axis(), mode, "target", value)
-        assert [w for w, _ in drv.refused] == ["set"]
-        assert drv.cur["target"] == 0.0 and g.get("target") == 0.0
-        _scripted(drv, None, 120)
-        assert np.array_equal(drv.rec.rows(), ref.rec.rows())
 
 
 @pytest.mark.parametrize("mode", ["instantiated", "initialization"])

@@ -20,6 +20,9 @@ from harness.fmu import spec
 from harness.fmu.runner import FMUError, GeneratorFMU
 
 ENUM_PARAMETERS = [v for v in spec.PARAMETERS if v.type == "Enumeration"]
+ENUM_ALIASED = [v for v in spec.VARIABLES if v.type == "Enumeration"]
+"""Every Enumeration with an FMI 2 Integer alias: the parameters and (issue 34) the inputs
+cmd_profile, cmd_shaper."""
 
 
 def _model_description_xml(fmu) -> ET.Element:
@@ -57,7 +60,9 @@ def test_fmi2_every_parameter_is_reachable_without_enumerations(fmu2):
 def test_fmi2_integer_aliases_declare_the_enumerations_values(fmu2):
     md = read_model_description(str(fmu2))
     by_name = {v.name: v for v in md.modelVariables}
-    for v in ENUM_PARAMETERS:
+    assert {v.name for v in ENUM_ALIASED} - {v.name for v in ENUM_PARAMETERS} == {
+        "cmd_profile", "cmd_shaper"}
+    for v in ENUM_ALIASED:
         alias, enum = by_name[v.name + "_code"], by_name[v.name]
         assert alias.type == "Integer" and enum.type == "Enumeration"
         assert alias.valueReference == enum.valueReference
@@ -68,8 +73,8 @@ def test_fmi2_integer_aliases_declare_the_enumerations_values(fmu2):
             assert f"{value} = {item}" in alias.description
     # the aliases come last: the indices the model structure refers to are the spec's
     names = [v.name for v in md.modelVariables]
-    n = len(ENUM_PARAMETERS)
-    assert names[-n:] == [v.name + "_code" for v in ENUM_PARAMETERS]
+    n = len(ENUM_ALIASED)
+    assert names[-n:] == [v.name + "_code" for v in ENUM_ALIASED]
     assert all(u.variable.causality == "output" for u in md.outputs)
 
 

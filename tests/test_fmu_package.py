@@ -78,8 +78,13 @@ def test_model_description_declares_capabilities(fmus, version):
                      "ShortStage": [("stretch", 1), ("overlap", 2)],
                      "JerkSource": [("parameters", 1), ("f_mode", 2), ("f_mode_ahead", 3)],
                      "Shaper": [("none", 0), ("ZV", 1), ("ZVD", 2), ("EI", 3), ("custom", 4)],
-                     "ShaperSource": [("f_shaper", 1), ("f_mode", 2)]}
+                     "ShaperSource": [("f_shaper", 1), ("f_mode", 2)],
+                     # issue 34: 0 = the parameter's value
+                     "CmdProfile": [("parameter", 0), ("AL", 1), ("JL", 2), ("DJL", 3)],
+                     "CmdShaper": [("parameter", 0), ("ZV", 1), ("ZVD", 2), ("EI", 3),
+                                   ("custom", 4), ("none", 5)]}
     assert by["profile"].declaredType.name == "Profile"
+    assert by["cmd_profile"].declaredType.name == "CmdProfile"
     display = {u.name: {d.name: d.factor for d in u.displayUnits} for u in md.unitDefinitions}
     quantity = {"m": ("Position", "mm"), "m/s": ("Velocity", "mm/s"),
                 "m/s2": ("Acceleration", "mm/s2"), "m/s3": ("Jerk", "mm/s3"),
@@ -89,8 +94,9 @@ def test_model_description_declares_capabilities(fmus, version):
             if v.unit == "Hz":  # f_mode: a frequency, displayed in Hz
                 assert v.declaredType.quantity == "Frequency", v.name
                 continue
-            if v.unit is None:  # dimensionless: zeta_shaper, shaper_amplitude
-                assert v.name.startswith(("zeta_shaper", "shaper_amplitude")), v.name
+            if v.unit is None:  # dimensionless: zeta_shaper, (cmd_)shaper_amplitude
+                assert v.name.startswith(("zeta_shaper", "shaper_amplitude",
+                                          "cmd_shaper_amplitude")), v.name
                 continue
             q, disp = quantity[v.unit]
             assert v.declaredType is not None and v.declaredType.quantity == q, v.name
@@ -111,7 +117,12 @@ def test_model_description_declares_capabilities(fmus, version):
                 assert v.max is None or float(x) <= float(v.max), v.name
     # issue #12: the inputs, with their declared start values
     inputs = {v.name: v for v in md.modelVariables if v.causality == "input"}
-    assert set(inputs) == {"target", "execute", "stop", "f_mode"}
+    assert set(inputs) == {"target", "execute", "stop", "f_mode"} | {
+        n for n in inputs if n.startswith("cmd_")}  # issue 34's per-command values
+    assert {n.split("[")[0] for n in inputs if n.startswith("cmd_")} == {
+        "cmd_v_max", "cmd_a_max", "cmd_d_max", "cmd_profile", "cmd_T_F", "cmd_shaper",
+        "cmd_shaper_n", "cmd_shaper_amplitude", "cmd_shaper_delay"} | (
+        {"cmd_profile_code", "cmd_shaper_code"} if version == 2 else set())
     assert inputs["execute"].type == inputs["stop"].type == "Boolean"
     assert inputs["target"].unit == "m" and inputs["f_mode"].unit == "Hz"
     assert by["jerk_source"].declaredType.name == "JerkSource"

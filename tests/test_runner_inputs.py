@@ -87,7 +87,6 @@ def test_numpy_scalars_and_ints_are_taken(gen):
 
 
 @pytest.mark.parametrize(("name", "value"), [
-    ("target", math.nan), ("target", math.inf), ("target", -math.inf), ("target", 2e300),
     ("f_mode", math.nan), ("f_mode", math.inf), ("f_mode", 0.0), ("f_mode", -3.0),
 ])
 def test_values_the_fmu_refuses_raise_fmu_error_naming_the_input(gen, name, value):
@@ -101,6 +100,26 @@ def test_values_the_fmu_refuses_raise_fmu_error_naming_the_input(gen, name, valu
     assert gen.get(name) == before  # unchanged
     gen.set_inputs(target=0.1, execute=True)  # the instance is still usable
     _run_until_rest(gen)
+    assert gen.get("x") == pytest.approx(0.1, rel=1e-9)
+
+
+@pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf, 2e300])
+def test_a_bad_target_is_taken_and_its_execute_refused_with_cmd_error(gen, value):
+    """Issue 34: an importer must not stop at a bad target.  The value is taken when set;
+    the execute edge that would use it is refused by the doStep (status OK) with
+    cmd_error = true, cmd_error_id = 1 (spec.CMD_ERRORS), and the axis stays where it was."""
+    gen.set_inputs(target=value, execute=True)
+    got = gen.get("target")
+    assert got == value or (math.isnan(got) and math.isnan(value))
+    x = gen.get("x")
+    gen.do_step(1e-3)
+    assert gen.get("cmd_error") and gen.get("cmd_error_id") == 1
+    assert gen.get("x") == x and gen.get("v") == 0.0
+    gen.set_inputs(target=0.1, execute=False)
+    gen.do_step(1e-3)
+    gen.set_inputs(execute=True)  # a valid command clears the error
+    _run_until_rest(gen)
+    assert not gen.get("cmd_error") and gen.get("cmd_error_id") == 0
     assert gen.get("x") == pytest.approx(0.1, rel=1e-9)
 
 

@@ -133,6 +133,11 @@ def c_header() -> str:
         lines.append(f"    DJL_LOG_{name.upper()} = {i},")
     lines += [f"    DJL_LOG_N = {len(spec.LOG_CATEGORIES)}", "} djl_log_category;", ""]
     lines += _c_enumerations()
+    lines += ["/* codes of the output cmd_error_id (spec.CMD_ERRORS) */", "typedef enum {",
+              "    CMD_ERR_NONE = 0,"]
+    lines += [f"    CMD_ERR_{name} = {code}, /* {what}: {meaning} */"
+              for code, name, what, meaning in spec.CMD_ERRORS]
+    lines += ["} djl_cmd_error;", ""]
     lines += [
         "#ifdef DJL_VARS_TABLES",
         "/* Variable table: FMI 2 element value reference = vr + index (arrays). */",

@@ -491,11 +491,14 @@ class GeneratorFMU:
         KeyError
             The FMU has no such input (an FMU without the commanded interface).
         FMUError
-            The FMU refused a value (NaN or infinite ``target`` or ``f_mode``,
-            |target| > 1e300, ``f_mode`` <= 0): the message names the input and
-            the value, the FMU keeps its previous value and stays usable.  The
-            inputs are set in the order target, f_mode, stop, execute; those
-            before the refused one are set.
+            The FMU refused a value (NaN or infinite ``f_mode``, ``f_mode`` <= 0):
+            the message names the input and the value, the FMU keeps its previous
+            value and stays usable.  The inputs are set in the order target, f_mode,
+            stop, execute; those before the refused one are set.  A ``target`` is
+            always taken (issue 34): an ``execute`` to one that is not finite or
+            beyond 1e300 m is refused by the next ``do_step``, which returns OK and
+            sets the outputs ``cmd_error`` and ``cmd_error_id``
+            (docs/generator.md, "Command errors").
         """
         given = [(name, kind, value) for name, kind, value in (
             ("target", "Real", target), ("f_mode", "Real", f_mode),

@@ -98,6 +98,22 @@ ENUMERATIONS: dict[str, tuple[tuple[str, int, str], ...]] = {
         ("EI", 3, "extra-insensitive, 5 % vibration tolerance: 3 impulses at [0, Td/2, Td]"),
         ("custom", 4, "shaper_n impulses shaper_amplitude[i] at shaper_delay[i]"),
     ),
+    "CmdProfile": (
+        ("parameter", 0, "the profile parameter's (the jerk times of the parametric move)"),
+        ("AL", 1, "acceleration-limited"),
+        ("JL", 2, "jerk-limited, one jerk time (cmd_T_F[1], else T_F1)"),
+        ("DJL", 3, "dissociated jerk-limited, jerk times cmd_T_F[i], else T_Fi"),
+    ),
+    "CmdShaper": (
+        ("parameter", 0, "the shaper parameter's design"),
+        ("ZV", 1, "zero vibration, for f_shaper"),
+        ("ZVD", 2, "zero vibration and derivative, for f_shaper"),
+        ("EI", 3, "extra-insensitive, for f_shaper"),
+        ("custom", 4, "cmd_shaper_n impulses cmd_shaper_amplitude[i] at cmd_shaper_delay[i] "
+                      "(cmd_shaper_n = 0: the parameters shaper_n, shaper_amplitude, "
+                      "shaper_delay)"),
+        ("none", 5, "no input shaping for this move"),
+    ),
     "ShaperSource": (
         ("f_shaper", 1, "the impulses are timed for the parameter f_shaper"),
         ("f_mode", 2, "each impulse is timed by the phase of the input f_mode accumulated "
@@ -133,6 +149,40 @@ MAX_SHAPER_DELAY_SAMPLES = 4096
 
 SHAPER_AMPLITUDE_TOLERANCE = 1e-9
 """A custom shaper's amplitudes must sum to 1 within this (``DJL_SHAPER_SUM_TOLERANCE``)."""
+
+CMD_ERRORS: tuple[tuple[int, str, str, str], ...] = (
+    (1, "TARGET", "target", "target is not finite or beyond 1e300 m in magnitude (an execute)"),
+    (2, "V_MAX", "cmd_v_max", "cmd_v_max is neither 0 nor a finite velocity > 0"),
+    (3, "A_MAX", "cmd_a_max", "cmd_a_max is neither 0 nor a finite acceleration > 0"),
+    (4, "D_MAX", "cmd_d_max", "cmd_d_max is neither 0 nor a finite deceleration > 0"),
+    (5, "PROFILE", "cmd_profile", "cmd_profile is not 0, 1, 2 or 3"),
+    (6, "T_F", "cmd_T_F",
+     f"a jerk time the command uses (cmd_T_F[i], or the T_Fi its 0 stands for) is not one of "
+     f"1..{MAX_FILTER_SAMPLES} samples of Te (finite, >= Te/2)"),
+    (7, "JERK_WITH_F_MODE", "cmd_profile",
+     "cmd_profile or a cmd_T_F[i] not 0 with jerk_source = 2 or 3 (the jerk times come from "
+     "f_mode)"),
+    (8, "SHAPER", "cmd_shaper",
+     "cmd_shaper is not 0..5, or its design is refused (f_shaper, zeta_shaper, f_mode)"),
+    (9, "SHAPER_N", "cmd_shaper_n",
+     f"cmd_shaper = 4 and cmd_shaper_n is not 0..{MAX_SHAPER_IMPULSES}"),
+    (10, "SHAPER_AMPLITUDE", "cmd_shaper_amplitude",
+     "cmd_shaper = 4: an amplitude is not finite, or they do not sum to 1 within "
+     f"{SHAPER_AMPLITUDE_TOLERANCE:g}"),
+    (11, "SHAPER_DELAY", "cmd_shaper_delay",
+     "cmd_shaper = 4: a delay is negative, not finite, or beyond "
+     f"{MAX_SHAPER_DELAY_SAMPLES} samples of Te (with shaper_source = 2: at the f_mode of the "
+     "command)"),
+    (12, "SHAPER_WHILE_MOVING", "cmd_shaper",
+     "another shaper than the one in force while the output is not at rest (done false, or "
+     "v != 0): a shaper changes only from rest"),
+    (13, "NO_MOTION", "target",
+     "no motion within the command's limits reaches target (too far for them, or longer "
+     "than the FMU's horizon; a stop: no stop within DJL_MAX_PLAN_END samples): the "
+     "planner's reason is logged"),
+)
+"""Codes of the output ``cmd_error_id`` (docs/generator.md, "Command errors"): code, C name
+(``CMD_ERR_<name>`` in ``djl_vars.h``), the input a message names, meaning.  0: no error."""
 
 MAX_TABLE = 256
 """Capacity of the replayed table's arrays (``DJL_MAX_TABLE`` in ``djl_core.h``): pieces of
@@ -202,11 +252,11 @@ def _o(name, vr, typ, desc, unit=None, c_name="", variability="discrete", min=No
 
 
 def _i(name, vr, typ, start, desc, unit=None, variability="discrete", min=None, max=None,
-       positive=False):
+       positive=False, size=1, declared_type=None):
     if positive:
         min = 0.0
-    return Variable(name, vr, typ, "input", variability, desc, unit, start, None, 1, "", min, max,
-                    positive)
+    return Variable(name, vr, typ, "input", variability, desc, unit, start, None, size, "", min,
+                    max, positive, declared_type)
 
 
 def _c(name, vr, typ, desc, unit=None, min=None, max=None):
@@ -281,8 +331,9 @@ VARIABLES: tuple[Variable, ...] = (
        "samples read when the stage starts; 3 = the same with f_mode extrapolated at its rate "
        "of change to the stages still to come (JL or DJL, n_segments = 0, v_e = 0)", min=1,
        max=3, declared_type="JerkSource"),
-    _i("target", 50, "Real", 0.0, "Target position of the next execute command (absolute)", "m",
-       min=-MAX_POSITION, max=MAX_POSITION),
+    _i("target", 50, "Real", 0.0, "Target position of the next execute command (absolute); "
+       "any value is accepted when set, a command to one that is not finite or beyond 1e300 m "
+       "is refused at its edge (cmd_error)", "m"),
     _i("execute", 51, "Boolean", False, "Rising edge: move from the current state (any velocity "
        "and acceleration) to target, ending at rest; a move in progress is replaced"),
     _i("stop", 52, "Boolean", False, "Rising edge: come to rest with d_max and the stages' jerk "
@@ -346,6 +397,41 @@ VARIABLES: tuple[Variable, ...] = (
        "most (a_max + d_max)/Te in magnitude; the table must keep the speed within v_max and the "
        "acceleration within [-d_max, a_max] (mirrored for distance < 0) and end at rest at x0 + "
        "distance", "m/s3", size=MAX_TABLE),
+    # --- per-command values and command errors (issue #34) -------------------------
+    _i("cmd_v_max", 70, "Real", 0.0, "Velocity limit of the move commanded by execute (latched "
+       "at its rising edge; at a stop edge, of the stop); 0 = the parameter v_max (a stop: the "
+       "stopped move's)", "m/s"),
+    _i("cmd_a_max", 71, "Real", 0.0, "Acceleration limit of the commanded move (latched as "
+       "cmd_v_max); 0 = a_max (a stop: the stopped move's)", "m/s2"),
+    _i("cmd_d_max", 72, "Real", 0.0, "Deceleration limit of the commanded move or stop (latched "
+       "as cmd_v_max); 0 = d_max (a stop: the stopped move's)", "m/s2"),
+    _i("cmd_profile", 73, "Enumeration", 0, "Profile of the commanded move or stop (latched as "
+       "cmd_v_max): 0 = the parameter's (a stop: the stopped move's), 1 = AL, 2 = JL "
+       "(cmd_T_F[1]), 3 = DJL (cmd_T_F[1..4]); another value is refused at the edge (cmd_error)",
+       min=0, max=3, declared_type="CmdProfile"),
+    _i("cmd_T_F", 500, "Real", 0.0, "Jerk times of the stages of the commanded move or stop "
+       "(latched as cmd_v_max); an element 0 = the parameter T_Fi (a stop: the stopped move's); "
+       "JL uses the first", "s", size=4),
+    _i("cmd_shaper", 74, "Enumeration", 0, "Input shaper of the commanded move (latched at the "
+       "execute edge; a stop keeps the move's): 0 = the parameter's design, 1 = ZV, 2 = ZVD, "
+       "3 = EI (for f_shaper), 4 = custom (cmd_shaper_n, cmd_shaper_amplitude, "
+       "cmd_shaper_delay), 5 = none; another shaper than the one in force only from rest "
+       "(done and v = 0); another value is refused at the edge (cmd_error)", min=0, max=5,
+       declared_type="CmdShaper"),
+    _i("cmd_shaper_n", 75, "Integer", 0, "Impulses of the custom shaper of the commanded move "
+       f"(cmd_shaper = 4), 1..{MAX_SHAPER_IMPULSES}; 0 = the parameters' custom design "
+       "(shaper_n, shaper_amplitude, shaper_delay)"),
+    _i("cmd_shaper_amplitude", 600, "Real", 0.0, "Amplitude of each impulse of the commanded "
+       "move's custom shaper (cmd_shaper = 4, cmd_shaper_n > 0; they sum to 1 within "
+       f"{SHAPER_AMPLITUDE_TOLERANCE:g})", size=MAX_SHAPER_IMPULSES),
+    _i("cmd_shaper_delay", 700, "Real", 0.0, "Delay of each impulse of the commanded move's "
+       f"custom shaper (cmd_shaper = 4, cmd_shaper_n > 0), >= 0, at most "
+       f"{MAX_SHAPER_DELAY_SAMPLES} samples of Te", "s", size=MAX_SHAPER_IMPULSES),
+    _o("cmd_error", 76, "Boolean", "True when the last command (execute or stop edge) was "
+       "refused: its values were invalid; the move in progress and every other value are "
+       "untouched, the step returns OK; the next valid command clears it"),
+    _o("cmd_error_id", 77, "Integer", "Why the last command was refused (docs/generator.md, "
+       "\"Command errors\"); 0 when cmd_error is false", min=0, max=len(CMD_ERRORS)),
 )
 
 PARAMETERS = tuple(v for v in VARIABLES if v.causality == "parameter")
@@ -360,21 +446,22 @@ FMI2_ENUM_ALIAS_SUFFIX = "_code"
 
 
 def fmi2_integer_aliases() -> tuple[Variable, ...]:
-    """Integer aliases of the Enumeration parameters, declared in the FMI 2 model description only.
+    """Integer aliases of the Enumeration parameters and inputs (FMI 2 model description only).
 
-    Some FMI 2 importers (those built on the FMI Library: libcosim, ecos) skip Enumeration
-    variables, so ``profile``, ``short_stage``, ``jerk_source``, ``shaper`` and
-    ``shaper_source`` could not be set there.  FMI 2.0 (section 2.2.7, ``valueReference``)
-    makes a value reference unique per base type "Real, Integer/Enumeration, Boolean, String"
-    except for alias variables: an Integer with the value reference of an Enumeration is an
-    alias of it, the same value read and written with ``fmi2SetInteger`` /
-    ``fmi2GetInteger``.  Each alias is ``<name>_code``, declared after every other variable
-    (the indices of ``<ModelStructure>`` do not move); FMI 3 has none (its ``<Alias>`` keeps
-    the type).
+    ``profile_code`` .. ``shaper_source_code``, and for the inputs ``cmd_profile_code`` and
+    ``cmd_shaper_code``.  Some FMI 2 importers (those built on the FMI Library: libcosim,
+    ecos) skip Enumeration variables, so ``profile``, ``short_stage``, ``jerk_source``,
+    ``shaper``, ``shaper_source``, ``cmd_profile`` and ``cmd_shaper`` could not be set
+    there.  FMI 2.0 (section 2.2.7, ``valueReference``) makes a value reference unique per
+    base type "Real, Integer/Enumeration, Boolean, String" except for alias variables: an
+    Integer with the value reference of an Enumeration is an alias of it, the same value
+    read and written with ``fmi2SetInteger`` / ``fmi2GetInteger``.  Each alias is
+    ``<name>_code``, declared after every other variable (the indices of
+    ``<ModelStructure>`` do not move); FMI 3 has none (its ``<Alias>`` keeps the type).
     """
     out = []
     for v in VARIABLES:
-        if v.type != "Enumeration" or v.causality != "parameter":
+        if v.type != "Enumeration" or v.causality not in ("parameter", "input"):
             continue
         items = ", ".join(f"{value} = {item}" for item, value, _ in ENUMERATIONS[v.declared_type])
         desc = (f"Integer alias of the Enumeration {v.name} (same value reference), for "

@@ -1071,15 +1071,24 @@ static void run_commands(int jerk_source)
         if (k == 380) set_bool(c, VR_STOP, 1);
         if (k == 381) set_bool(c, VR_STOP, 0);
         if (k == 600) {
-            /* bad values: refused naming the input, nothing changed */
+            /* bad values: f_mode refused naming it, nothing changed; a NaN target is taken
+             * and its command refused at the edge (cmd_error, issue 34) */
             bad = NAN;
-            expect_error(fmi2SetReal(c, &vt, 1, &bad), "target");
+            CHECK(fmi2SetReal(c, &vt, 1, &bad) == fmi2OK, "a NaN target is taken");
+            CHECK(isnan(get_real(c, VR_TARGET)), "target reads back NaN");
+            set_bool(c, VR_EXECUTE, 1);
             bad = -1.0;
             expect_error(fmi2SetReal(c, &vf, 1, &bad), "f_mode");
             bad = 1e6; /* a period of 1 us: below Te/2 */
             expect_error(fmi2SetReal(c, &vf, 1, &bad), "f_mode");
-            CHECK(get_real(c, VR_TARGET) == -0.2 && get_real(c, VR_F_MODE) == f,
-                  "the previous values are kept");
+            CHECK(get_real(c, VR_F_MODE) == f, "the previous values are kept");
+        }
+        if (k == 601) {
+            CHECK(get_bool(c, VR_CMD_ERROR) && get_int(c, VR_CMD_ERROR_ID) == CMD_ERR_TARGET,
+                  "the execute to a NaN target is refused: cmd_error %d, id %d",
+                  get_bool(c, VR_CMD_ERROR), get_int(c, VR_CMD_ERROR_ID));
+            set_bool(c, VR_EXECUTE, 0);
+            set_real(c, VR_TARGET, -0.2);
         }
         if (k == 700) {
             CHECK(fmi2GetFMUstate(c, &s) == fmi2OK && s, "get state");
@@ -1352,9 +1361,15 @@ static void run_issue21_long_stops(void)
         x = get_real(c, VR_X);
         set_bool(c, VR_STOP, 1);
         if (i == 0) {
-            expect_error(fmi2DoStep(c, t, 0.02, fmi2True), "d_max");
-            CHECK(strstr(last_message, "takes too long") != NULL, "message: %s", last_message);
-            CHECK(get_real(c, VR_X) == x, "a refused stop moved the axis");
+            /* refused at its edge (issue 34): the step OK, cmd_error, the cruise goes on */
+            double v = get_real(c, VR_V);
+            CHECK(fmi2DoStep(c, t, 0.02, fmi2True) == fmi2OK, "refused stop: %s", last_message);
+            CHECK(strstr(last_message, "takes too long") != NULL &&
+                  strstr(last_message, "d_max") != NULL, "message: %s", last_message);
+            CHECK(get_bool(c, VR_CMD_ERROR) && get_int(c, VR_CMD_ERROR_ID) == CMD_ERR_NO_MOTION,
+                  "cmd_error after a stop that cannot be made");
+            CHECK(get_real(c, VR_V) == v && fabs(get_real(c, VR_X) - (x + v * 0.02)) <=
+                  1e-12 * fabs(x), "a refused stop changed the cruise");
         } else {
             CHECK(fmi2DoStep(c, t, 0.02, fmi2True) == fmi2OK, "long stop: %s", last_message);
             CHECK(fabs(get_real(c, VR_A)) <= dmax[i] * (1.0 + 1e-9),
@@ -1369,7 +1384,7 @@ static void run_issue21_long_stops(void)
               last_message);
         CHECK(fmi2SetFMUstate(c, s2) == fmi2OK, "set: %s", last_message);
         set_bool(c, VR_STOP, 0);
-        CHECK(fmi2DoStep(c, t + 0.02 * i, 0.02, fmi2True) == fmi2OK, "step on: %s", last_message);
+        CHECK(fmi2DoStep(c, t + 0.02, 0.02, fmi2True) == fmi2OK, "step on: %s", last_message);
         free(buf);
         fmi2FreeFMUstate(c, &s);
         fmi2FreeFMUstate(c, &s2);

@@ -6,7 +6,9 @@
  * wrong type) to any value, enter / exit initialisation, steps of any size from any
  * point, getters, FMU state get / set / free / serialise / deserialise (a copy, or a
  * forged one: a word changed and the checksum recomputed), reset, terminate, commands
- * (target + execute edge, stop edge, f_mode), debug logging; and a whole table for
+ * (target + execute edge, stop edge, f_mode; issue 34's per-command values: any input
+ * cmd_* set to any value, a move with its own limits, jerk times or profile, a custom
+ * shaper of a move, every cmd_* back to 0), debug logging; and a whole table for
  * profile 4 (bang-bang pieces that come back to rest, with the distance and limits they
  * need, or a little off them: load_table).
  *
@@ -16,10 +18,13 @@
  *    initialisation);
  *  - in Step Mode after an OK step: |v| <= v_max, a within the larger of a_max and d_max,
  *    times the sum of the shaper's |amplitudes| (a custom shaper may overshoot), up to
- *    rounding; done == !busy;
+ *    rounding, the limits and the amplitudes being the largest of the parameters' and of
+ *    every command the FMU accepted (cmd_error false after its edge); done == !busy;
+ *    cmd_error_id is a code (0..CMD_ERR_NO_MOTION), 0 exactly when cmd_error is false;
  *  - a move the harness can follow (from initialisation, commands decoded as the FMU
  *    sees them, no state restored) that reports done rests on its goal: the parametric
- *    end (x0 + distances) when it ends at rest, a commanded target, at rest after a stop;
+ *    end (x0 + distances) when it ends at rest, a commanded target, at rest after a stop
+ *    (a command refused with cmd_error leaves the goal as it was);
  *  - a state the FMU saved itself is accepted back (set, serialise, deserialise) and
  *    restores the outputs it was saved with.
  * Built with clang -fsanitize=fuzzer,address,undefined (tests/fuzz/build.sh) or, without
@@ -36,10 +41,13 @@
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-/* Variables of the table before issue 33 added table_n, table_samples, table_jerk last. */
+/* Variables of the table before issue 33 added table_n, table_samples, table_jerk, and
+ * issue 34 the eleven per-command inputs and outputs after them. */
 #define FUZZ_OLD_VARS 50
-typedef char fuzz_old_vars_check[(DJL_N_VARS == FUZZ_OLD_VARS + 3 &&
-                                   VR_TABLE_N == 65 && VR_TABLE_JERK == 2000) ? 1 : -1];
+#define FUZZ_TABLE_VARS 3
+typedef char fuzz_old_vars_check[(DJL_N_VARS == FUZZ_OLD_VARS + FUZZ_TABLE_VARS + 11 &&
+                                   VR_TABLE_N == 65 && VR_TABLE_JERK == 2000 &&
+                                   VR_CMD_V_MAX == 70 && VR_CMD_ERROR_ID == 77) ? 1 : -1];
 
 /* ------------------------------------------------------------------ the two layers */
 
@@ -399,6 +407,8 @@ typedef struct {
     int exec_seen, stop_seen; /* the Boolean inputs at the last step, as the FMU saw them */
     double t;       /* the FMU's time */
     int stepping;   /* Step Mode, the last step OK */
+    double cmd_v, cmd_a, cmd_fac; /* the largest cmd_v_max, of cmd_a_max and cmd_d_max, and
+                       sum of a custom cmd shaper's |amplitudes| a command was accepted with */
 } follow;
 
 static unsigned char state_buf[sizeof(model_data)]; /* more than the largest state */
@@ -450,23 +460,56 @@ static double parametric_end(fmu *f, double *scale)
     return ve == 0.0 ? end : NAN;
 }
 
+/* A command accepted (its edge stepped over, cmd_error false): its limits and a custom
+ * shaper's amplitudes widen the bounds check_step holds the outputs to. */
+static void command_accepted(fmu *f, follow *w, int execute)
+{
+    long long shaper = 0, n = 0;
+    double fac = 0.0, x;
+    int i;
+    x = par(f, VR_CMD_V_MAX);
+    if (x > w->cmd_v) w->cmd_v = x;
+    x = par(f, VR_CMD_A_MAX);
+    if (x > w->cmd_a) w->cmd_a = x;
+    x = par(f, VR_CMD_D_MAX);
+    if (x > w->cmd_a) w->cmd_a = x;
+    if (!execute) return;
+    (void)get_int(f, VR_CMD_SHAPER, &shaper);
+    if (shaper != CMD_SHAPER_CUSTOM) return;
+    (void)get_int(f, VR_CMD_SHAPER_N, &n);
+    if (n > 0) {
+        for (i = 0; i < n && i < 8; i++) fac += fabs(par(f, VR_CMD_SHAPER_AMPLITUDE + (unsigned)i));
+    } else {
+        (void)get_int(f, VR_SHAPER_N, &n);
+        for (i = 0; i < n && i < 8; i++) fac += fabs(par(f, VR_SHAPER_AMPLITUDE + (unsigned)i));
+    }
+    if (fac > w->cmd_fac) w->cmd_fac = fac;
+}
+
 static void check_step(fmu *f, follow *w)
 {
     outputs o;
     double vmax = par(f, VR_V_MAX), amax = par(f, VR_A_MAX), dmax = par(f, VR_D_MAX), fac = 1.0;
     double lim;
-    long long shaper = 0, n = 0;
-    int i;
+    long long shaper = 0, n = 0, id = -1;
+    int i, err = -1;
     read_outputs(f, &o);
     trace("  -> x %.17g, v %.17g, a %.17g, done %d", o.x, o.v, o.a, o.done);
     if (!w->stepping) return;
     FUZZ_CHECK(o.done == !o.busy, "done %d busy %d", o.done, o.busy);
+    if (get_bool(f, VR_CMD_ERROR, &err) == 0 && get_int(f, VR_CMD_ERROR_ID, &id) == 0)
+        FUZZ_CHECK(id >= 0 && id <= CMD_ERR_NO_MOTION && (id != 0) == (err != 0),
+                   "cmd_error %d, cmd_error_id %lld", err, id);
     (void)get_int(f, VR_SHAPER, &shaper);
     if (shaper == SHAPER_CUSTOM) {
         (void)get_int(f, VR_SHAPER_N, &n);
         fac = 0.0;
         for (i = 0; i < n && i < 8; i++) fac += fabs(par(f, VR_SHAPER_AMPLITUDE + (unsigned)i));
     }
+    /* the largest of the parameters' and of the commands accepted */
+    if (w->cmd_fac > fac) fac = w->cmd_fac;
+    if (w->cmd_v > vmax) vmax = w->cmd_v;
+    if (w->cmd_a > amax) amax = w->cmd_a;
     lim = vmax * fac * (1.0 + 1e-9);
     FUZZ_CHECK(fabs(o.v) <= lim, "|v| = %.17g above v_max %.17g (x %g)", o.v, vmax, fac);
     lim = (amax > dmax ? amax : dmax) * fac * (1.0 + 1e-9);
@@ -591,6 +634,77 @@ static void own_state(fmu *f, int slot, int stepping)
         FUZZ_CHECK(memcmp(&a, &b, sizeof a) == 0, "a restored state gives other outputs");
 }
 
+/* A value of the scale of x (a factor of 1/64 to 4 of it, 0, its negative), or any double. */
+static double scaled(fuzz_reader *r, double x)
+{
+    uint8_t k = rd_u8(r);
+    switch (k % 4) {
+    case 0: return 0.0;
+    case 1: return x * (double)(1 + rd_u8(r)) / 64.0;
+    case 2: return -x;
+    default: return rd_double(r);
+    }
+}
+
+/* Issue 34's per-command values: 0 one input cmd_* set to a value of its scale or any
+ * value (an integer: any int8), 1 a move with limits, jerk times and a profile of its own
+ * (execute edge), 2 a move with a custom shaper of its own (execute edge), 3 every cmd_*
+ * back to 0. */
+static void per_command(fmu *f, fuzz_reader *r, int what, double Te)
+{
+    static const unsigned reals[] = {VR_CMD_V_MAX, VR_CMD_A_MAX, VR_CMD_D_MAX, VR_CMD_T_F,
+                                     VR_CMD_SHAPER_AMPLITUDE, VR_CMD_SHAPER_DELAY};
+    static const unsigned ints[] = {VR_CMD_PROFILE, VR_CMD_SHAPER, VR_CMD_SHAPER_N};
+    int i;
+    switch (what) {
+    case 0: {
+        uint8_t k = rd_u8(r);
+        if (k % 3 == 0) {
+            unsigned vr = ints[rd_u8(r) % 3];
+            (void)set_int(f, vr, (long long)(int8_t)rd_u8(r), is_enumeration(vr));
+        } else {
+            unsigned q = rd_u8(r) % 6, vr = reals[q];
+            double base = q == 0 ? par(f, VR_V_MAX) : q < 3 ? par(f, VR_A_MAX)
+                          : q == 4 ? 0.5 : Te * 8.0;
+            if (q >= 3) vr += (unsigned)(rd_u8(r) % (q == 3 ? 4 : 8));
+            (void)set_real(f, vr, scaled(r, base));
+        }
+        break;
+    }
+    case 1:
+        (void)set_real(f, VR_CMD_V_MAX, scaled(r, par(f, VR_V_MAX)));
+        (void)set_real(f, VR_CMD_A_MAX, scaled(r, par(f, VR_A_MAX)));
+        (void)set_real(f, VR_CMD_D_MAX, scaled(r, par(f, VR_D_MAX)));
+        (void)set_int(f, VR_CMD_PROFILE, rd_u8(r) % 5, 1);
+        for (i = 0; i < 4; i++)
+            (void)set_real(f, VR_CMD_T_F + (unsigned)i, Te * (double)(rd_u8(r) % 40));
+        (void)set_real(f, VR_TARGET, scaled(r, 1.0));
+        (void)set_bool(f, VR_EXECUTE, 1);
+        break;
+    case 2: {
+        int n = 1 + rd_u8(r) % 4;
+        double sum = 0.0, A[8];
+        for (i = 0; i < n; i++) sum += A[i] = 1.0 + rd_u8(r);
+        for (i = 0; i < n; i++) {
+            (void)set_real(f, VR_CMD_SHAPER_AMPLITUDE + (unsigned)i, A[i] / sum);
+            (void)set_real(f, VR_CMD_SHAPER_DELAY + (unsigned)i, Te * (double)(rd_u8(r) % 64));
+        }
+        (void)set_int(f, VR_CMD_SHAPER_N, n, 0);
+        (void)set_int(f, VR_CMD_SHAPER, rd_u8(r) % 7, 1);
+        (void)set_real(f, VR_TARGET, scaled(r, 1.0));
+        (void)set_bool(f, VR_EXECUTE, 1);
+        break;
+    }
+    default:
+        for (i = 0; i < 6; i++) {
+            unsigned k, n = i == 3 ? 4 : i >= 4 ? 8 : 1;
+            for (k = 0; k < n; k++) (void)set_real(f, reals[i] + k, 0.0);
+        }
+        for (i = 0; i < 3; i++) (void)set_int(f, ints[i], 0, is_enumeration(ints[i]));
+        break;
+    }
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     fuzz_reader r;
@@ -614,7 +728,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             uint8_t b = rd_u8(&r);
             const djl_var_info *v =
                 &djl_var_table[b < 250 ? b % FUZZ_OLD_VARS
-                                       : FUZZ_OLD_VARS + (b - 250) % (DJL_N_VARS - FUZZ_OLD_VARS)];
+                                       : FUZZ_OLD_VARS + (b - 250) % FUZZ_TABLE_VARS];
             unsigned vr = v->vr + (v->size > 1 ? rd_u8(&r) % v->size : 0);
             uint8_t how = rd_u8(&r);
             char type = how & 0x80 ? "RIBE"[how & 3] : v->type;
@@ -661,7 +775,15 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             if (st != 0) {
                 w.tracked = 0;
             } else {
-                if (ex && !w.exec_seen && sp && !w.stop_seen) {
+                int refused = 0;
+                if ((ex && !w.exec_seen) || (sp && !w.stop_seen)) {
+                    /* a command: refused (cmd_error, the goal as it was) or accepted */
+                    (void)get_bool(&f, VR_CMD_ERROR, &refused);
+                    if (!refused) command_accepted(&f, &w, !(sp && !w.stop_seen));
+                }
+                if (refused) {
+                    /* the move in progress goes on */
+                } else if (ex && !w.exec_seen && sp && !w.stop_seen) {
                     w.tracked = 0;
                 } else if (ex && !w.exec_seen) {
                     w.goal = GOAL_TARGET;
@@ -675,8 +797,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             check_step(&f, &w);
             break;
         }
-        case 7: /* a command: a target and an execute edge, or a stop edge, or f_mode */
-            switch (rd_u8(&r) % 4) {
+        case 7: { /* a command: a target and an execute edge, or a stop edge, or f_mode; from
+                   * a byte of 252 up (the corpus keeps its meaning), issue 34's values */
+            uint8_t b = rd_u8(&r);
+            if (b >= 252) {
+                per_command(&f, &r, b - 252, Te);
+                break;
+            }
+            switch (b % 4) {
             case 0:
                 (void)set_real(&f, VR_TARGET, rd_double(&r));
                 (void)set_bool(&f, VR_EXECUTE, 1);
@@ -686,6 +814,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             default: (void)set_real(&f, VR_F_MODE, rd_double(&r)); break;
             }
             break;
+        }
         case 8: { /* getters of every variable */
             int i;
             outputs o;
