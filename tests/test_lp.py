@@ -87,3 +87,32 @@ def test_highs_prints_nothing_to_standard_output():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True)
     assert out.stdout.strip() == "True"
+
+
+@pytest.mark.parametrize("cls", SOLVERS)
+@pytest.mark.parametrize("seed", range(4))
+def test_pruning_keeps_the_optimum_and_the_row_indices(cls, seed):
+    rng = np.random.default_rng(100 + seed)
+    n, k = 6, 80
+    M = rng.normal(size=(k, n))
+    rhi = rng.random(k) + 0.2
+    c = rng.normal(size=n)
+    lo, hi = np.full(n, -2.0), np.full(n, 2.0)
+    lp = cls(lo, hi, c)
+    lp.add(M[:40], -np.inf, rhi[:40])
+    lp.add(M[40:], -np.inf, rhi[40:])
+    assert lp.solve()
+    value = lp.value
+    gone = lp.prune(since=10)
+    # rows the optimum leaves slack, never one below ``since``, each at most once
+    assert gone.size > 0 and gone.min() >= 10 and np.unique(gone).size == gone.size
+    slack = M[gone] @ lp.x < rhi[gone] - 1e-9
+    assert slack.all()
+    assert lp.solve() and lp.value == pytest.approx(value, abs=1e-9)
+    # indices are kept: the second block is still dropped from its own start
+    lp.drop_from(40)
+    assert lp.rows == 40 and lp.solve()
+    # and the optimum is the fresh one of what is left: the first block without the pruned
+    keep = np.setdiff1d(np.arange(40), gone)
+    assert lp.value == pytest.approx(scipy_value(c, lo, hi, M[keep], np.full(keep.size, -np.inf),
+                                                 rhi[keep]), abs=1e-7)
