@@ -427,6 +427,10 @@ typedef struct {
                               d_max): the axis rests, then moves within v_max.  The new
                               plan's own limits (its p) are the larger of the old plan's and
                               these: its pieces hold the old plan's ramps. */
+    double v_end;   /* m/s, signed: the new motion ends at the target moving at v_end (a
+                       blend into the next move: it then cruises on at v_end from its end,
+                       plan->v_target); 0: at rest.  DJL_GOAL_TARGET only; no fallback
+                       that stops first (DJL_E_INFEASIBLE instead) */
 } djl_goal;
 
 /* What a replan decided (for logs and diagnostics). */

@@ -491,7 +491,7 @@ static djl_status fresh_plan(const djl_plan *old, const replan_state *r, const d
     q.x0 = 0.0;
     q.v0 = dmax2(-q.v_max, dmin2(q.v_max, v));
     q.distance = dist;
-    q.v_e = 0.0;
+    q.v_e = g->kind == DJL_GOAL_TARGET ? g->v_end : 0.0;
     q.n_segments = 0;
     if (g->keep_speed && q.v0 * dist >= 0.0 && dist != 0.0) {
         /* no faster than planned (or than now): a cruise keeps its speed, the landing
@@ -591,10 +591,10 @@ static djl_status compose(const djl_plan *old, const replan_state *r, const tran
     p.v0 = dmax2(-p.v_max, dmin2(p.v_max, r->v));
     p.n_segments = 0;
     p.distance = x_goal;
-    p.v_e = 0.0;
+    p.v_e = fresh ? fresh->p.v_e : 0.0;
     out->p = p;
     out->x_target = x_goal;
-    out->v_target = 0.0;
+    out->v_target = fresh ? fresh->v_target : 0.0;
     return DJL_OK;
 }
 
@@ -665,6 +665,10 @@ djl_status djl_replan(const djl_plan *old, double u, const djl_goal *g, djl_plan
     if (g->kind != DJL_GOAL_TARGET && g->kind != DJL_GOAL_STOP)
         return set_error(err, DJL_E_PARAM, "goal", (double)g->kind, "replan: unknown goal %d",
                          (int)g->kind);
+    if (!djl_isfinite(g->v_end) || (g->v_end != 0.0 && g->kind != DJL_GOAL_TARGET))
+        return set_error(err, DJL_E_PARAM, "v_end", g->v_end,
+                         "replan: end velocity %g m/s: must be finite, and 0 for a stop",
+                         g->v_end);
     if (g->kind == DJL_GOAL_TARGET &&
         !(djl_isfinite(g->target) && djl_fabs(g->target) <= DJL_MAX_POSITION))
         return set_error(err, DJL_E_PARAM, "target", g->target,
@@ -750,12 +754,12 @@ djl_status djl_replan(const djl_plan *old, double u, const djl_goal *g, djl_plan
                                                   djl_fabs(st[0]) + vs * r.Te))
             dist = 0.0;
         if (djl_fabs(dist) < DJL_MIN_MAGNITUDE) dist = 0.0;
-        if (dist == 0.0 && v == 0.0) {
+        if (dist == 0.0 && v == 0.0 && g->v_end == 0.0) {
             s2 = compose(old, &r, &t, T, NULL, g, out, err);
             if (s2 != DJL_OK) return s2;
             break;
         }
-        if (how != 2 && v != 0.0) {
+        if (how != 2 && v != 0.0 && g->v_end == 0.0) {
             /* no new motion from v if stopping at once already passes the target */
             double vv, X = rest_after(&r, &t, g->N, &vv);
             if ((v > 0.0 ? 1.0 : -1.0) * ((g->target - r.x) - X) < 0.0) {
@@ -785,7 +789,7 @@ djl_status djl_replan(const djl_plan *old, double u, const djl_goal *g, djl_plan
             continue;
         }
         if (how == 1 || how == 4) {
-            if (g->no_stop_first)
+            if (g->no_stop_first || g->v_end != 0.0)
                 return set_error(err, DJL_E_INFEASIBLE, "N", (double)g->N[0],
                                  "with the jerk times %d/%d/%d/%d samples the axis would have "
                                  "to stop and come back to land", (int)g->N[0], (int)g->N[1],

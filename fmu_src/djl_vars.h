@@ -4,7 +4,7 @@
 #define DJL_VARS_H
 
 #define DJL_MODEL_IDENTIFIER "JerkLimitedTrajectory"
-#define DJL_INSTANTIATION_TOKEN "{13c92160-4217-53d5-ad38-8daad474b2ef}"
+#define DJL_INSTANTIATION_TOKEN "{379ed864-4832-5c05-a838-36343285e3f8}"
 #define DJL_VARS_MAX_SEGMENTS 32
 
 /* value references (arrays: first element; element i at base + i) */
@@ -71,6 +71,12 @@ typedef enum {
     VR_CMD_SHAPER_N = 75,
     VR_CMD_SHAPER_AMPLITUDE = 600,
     VR_CMD_SHAPER_DELAY = 700,
+    VR_BUFFER_MODE = 78,
+    VR_MIN_DURATION = 79,
+    VR_ACTIVE = 80,
+    VR_COMMAND_ABORTED = 81,
+    VR_QUEUE_LENGTH = 82,
+    VR_TIME_TO_REST = 83,
     VR_CMD_ERROR = 76,
     VR_CMD_ERROR_ID = 77,
 } djl_vr;
@@ -127,6 +133,12 @@ typedef enum {
 } djl_enum_cmd_shaper;
 
 typedef enum {
+    BUFFER_MODE_ABORTING = 0,
+    BUFFER_MODE_BUFFERED = 1,
+    BUFFER_MODE_BLENDING = 2,
+} djl_enum_buffer_mode;
+
+typedef enum {
     SHAPER_SOURCE_F_SHAPER = 1,
     SHAPER_SOURCE_F_MODE = 2,
 } djl_enum_shaper_source;
@@ -147,6 +159,9 @@ typedef enum {
     CMD_ERR_SHAPER_DELAY = 11, /* cmd_shaper_delay: cmd_shaper = 4: a delay is negative, not finite, or beyond 4096 samples of Te (with shaper_source = 2: at the f_mode of the command) */
     CMD_ERR_SHAPER_WHILE_MOVING = 12, /* cmd_shaper: another shaper than the one in force while the output is not at rest (done false, or v != 0): a shaper changes only from rest */
     CMD_ERR_NO_MOTION = 13, /* target: no motion within the command's limits reaches target (too far for them, or longer than the FMU's horizon; a stop: no stop within DJL_MAX_PLAN_END samples): the planner's reason is logged */
+    CMD_ERR_BUFFER_MODE = 14, /* buffer_mode: buffer_mode is not 0 (aborting), 1 (buffered) or 2 (blending) */
+    CMD_ERR_MIN_DURATION = 15, /* min_duration: min_duration is neither 0 nor a finite duration > 0 (s) */
+    CMD_ERR_QUEUE_FULL = 16, /* buffer_mode: a buffered or blending execute while 16 commands already wait */
 } djl_cmd_error;
 
 #ifdef DJL_VARS_TABLES
@@ -224,10 +239,16 @@ static const djl_var_info djl_var_table[] = {
     {75u, 'I', 'i', 1, "cmd_shaper_n"},
     {600u, 'R', 'i', 8, "cmd_shaper_amplitude"},
     {700u, 'R', 'i', 8, "cmd_shaper_delay"},
+    {78u, 'E', 'i', 1, "buffer_mode"},
+    {79u, 'R', 'i', 1, "min_duration"},
+    {80u, 'B', 'o', 1, "active"},
+    {81u, 'B', 'o', 1, "command_aborted"},
+    {82u, 'I', 'o', 1, "queue_length"},
+    {83u, 'R', 'o', 1, "time_to_rest"},
     {76u, 'B', 'o', 1, "cmd_error"},
     {77u, 'I', 'o', 1, "cmd_error_id"},
 };
-#define DJL_N_VARS 64
+#define DJL_N_VARS 70
 
 static const char *const djl_log_category_names[] = {
     "logEvents",
@@ -351,6 +372,7 @@ static const char *const djl_jerk_source_names[] = {"", "parameters", "f_mode", 
 static const char *const djl_shaper_names[] = {"none", "ZV", "ZVD", "EI", "custom"};
 static const char *const djl_cmd_profile_names[] = {"parameter", "AL", "JL", "DJL"};
 static const char *const djl_cmd_shaper_names[] = {"parameter", "ZV", "ZVD", "EI", "custom", "none"};
+static const char *const djl_buffer_mode_names[] = {"aborting", "buffered", "blending"};
 static const char *const djl_shaper_source_names[] = {"", "f_shaper", "f_mode"};
 #endif /* DJL_VARS_PARAMETERS */
 

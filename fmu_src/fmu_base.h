@@ -52,9 +52,12 @@ const char *model_state_name(int state);
 /* the data of an instance                                                  */
 
 #define MODEL_MAGIC 0x4a4c4446u /* "FDLJ" */
-#define MODEL_LAYOUT 9u          /* of model_data: a state of another layout is refused (8: the
+#define MODEL_LAYOUT 10u         /* of model_data: a state of another layout is refused (8: the
                                     replayed table, djl_table, and 264 plan steps; 9: the
-                                    per-command values and command errors, issue 34) */
+                                    per-command values and command errors, issue 34; 10: the
+                                    queue of buffered and blending commands, min_duration) */
+/* Commands a buffered or blending execute can wait behind (spec.QUEUE_CAPACITY). */
+#define MODEL_QUEUE_CAPACITY 16
 
 /* The figures of the parametric move planned at initialisation (the calculated
  * parameters motion_time, N_F1..N_F4, v_reached, a_reached, d_reached): commands
@@ -78,6 +81,17 @@ typedef struct {
     double amplitude[DJL_MAX_SHAPER_IMPULSES]; /* cmd_shaper_amplitude */
     double delay[DJL_MAX_SHAPER_IMPULSES];     /* cmd_shaper_delay, s */
 } model_cmd_inputs;
+
+/* A command waiting in the queue (buffer_mode 1 or 2): its inputs as latched at its edge
+ * (checked there: valid), resolved when it starts. */
+typedef struct {
+    model_cmd_inputs cmd;       /* the cmd_* inputs at its edge */
+    double target;              /* m */
+    double min_duration;        /* s, 0: none */
+    int32_t buffer_mode;        /* BUFFER_MODE_BUFFERED or BUFFER_MODE_BLENDING */
+    int32_t pad;
+    int64_t id;                 /* its number among the execute edges accepted (1, 2, ...) */
+} model_queued;
 
 /* The values of the move in progress, latched at its command (the parametric move: the
  * parameters'): what a replan of it (jerk times from f_mode) and a stop without values of
@@ -141,6 +155,15 @@ typedef struct {
     double env_v_max, env_a_max, env_d_max; /* the largest limits of every move since the
                                start (the plan's own p limits: its pieces may hold parts of
                                earlier moves) */
+    /* buffer modes and synchronisation (issue 34 items 2 and 4) */
+    int32_t buffer_mode;    /* input (any value: checked at an execute edge) */
+    int32_t command_aborted; /* output, 0 or 1 */
+    double min_duration;    /* s, input (any value: checked at an execute edge) */
+    int64_t n_commands;     /* execute edges accepted since the start (their ids) */
+    int64_t running_id;     /* id of the command whose move is in progress (0: the
+                               parametric move, or a stop) */
+    int32_t queue_n, queue_first; /* waiting: queue[(queue_first + i) % CAPACITY], i < n */
+    model_queued queue[MODEL_QUEUE_CAPACITY];
     int32_t cmd_error;      /* output cmd_error, 0 or 1 */
     int32_t cmd_error_id;   /* output cmd_error_id (spec.CMD_ERRORS), 0 without error */
     djl_shaper_memory mem;  /* what the delayed copies read of the plans replans replaced; the
@@ -155,6 +178,8 @@ typedef struct {
     double step_h, step_Te, step_whole;
     /* work space of a replan (its new motion) */
     djl_plan scratch;
+    /* a trial plan: a replan planned aside (min_duration's search, a blend's speed) */
+    djl_plan trial;
 } model_work;
 
 typedef void (*model_logger)(void *env, model_status status, const char *category,

@@ -76,6 +76,34 @@ static void evaluate(model_data *d)
                         d->shaper_cursor, &d->out);
 }
 
+/* The shaper's copies trail the plan's end by this many samples (its largest delay; with
+ * shaper_source = 2 at the f_mode now). */
+static double shaper_tail(const model_data *d)
+{
+    if (d->shaper.n == 0) return 0.0;
+    if (d->shaper.source == DJL_SHAPER_SOURCE_F_MODE)
+        return d->shaper.phase_max / (d->f_mode * d->p.Te);
+    return d->shaper.d_max;
+}
+
+/* The outputs done and busy: the move in progress has ended (shaper copies included) and
+ * no command waits. */
+static int program_done(const model_data *d)
+{
+    return d->out.done && d->queue_n == 0;
+}
+
+/* The output time_to_rest (s): until the move in progress ends, shaper copies included (a
+ * move blending into the next: until it passes its target, where the next one starts). */
+static double time_to_rest(const model_data *d)
+{
+    double u = (double)d->n - d->offset + d->phase, left;
+    if (d->out.done) return 0.0;
+    left = ((double)d->plan.k_end - u) * d->p.Te;
+    if (d->plan.v_target == 0.0) left += shaper_tail(d) * d->p.Te;
+    return left > 0.0 ? left : 0.0;
+}
+
 static void log_plan(const model_instance *m)
 {
     const djl_plan *pl = &m->d.plan;
@@ -322,6 +350,12 @@ static model_status ensure_plan(model_instance *m, const char *fn)
     d->env_d_max = d->p.d_max;
     d->cmd_error = 0;
     d->cmd_error_id = 0;
+    d->command_aborted = 0;
+    d->n_commands = 0;
+    d->running_id = 0;
+    d->queue_n = 0;
+    d->queue_first = 0;
+    memset(d->queue, 0, sizeof d->queue);
     evaluate(d);
     log_plan(m);
     log_shaper(m);
@@ -385,6 +419,8 @@ static model_status set_input(model_instance *m, const model_var *v, double valu
     case VR_CMD_SHAPER_N: d->cmd.shaper_n = (int32_t)value; return ST_OK;
     case VR_CMD_SHAPER_AMPLITUDE: d->cmd.amplitude[v->index] = value; return ST_OK;
     case VR_CMD_SHAPER_DELAY: d->cmd.delay[v->index] = value; return ST_OK;
+    case VR_BUFFER_MODE: d->buffer_mode = (int32_t)value; return ST_OK;
+    case VR_MIN_DURATION: d->min_duration = value; return ST_OK;
     default: return model_fail(m, "set: internal error, no storage for input %s", v->name);
     }
 }
@@ -486,6 +522,8 @@ model_status model_get(model_instance *m, unsigned int vr, char type, double *va
         case VR_CMD_SHAPER_N: *value = (double)d->cmd.shaper_n; break;
         case VR_CMD_SHAPER_AMPLITUDE: *value = d->cmd.amplitude[v.index]; break;
         case VR_CMD_SHAPER_DELAY: *value = d->cmd.delay[v.index]; break;
+        case VR_BUFFER_MODE: *value = (double)d->buffer_mode; break;
+        case VR_MIN_DURATION: *value = d->min_duration; break;
         default: return model_fail(m, "get: internal error, no value for input %s", v.name);
         }
         return ST_OK;
@@ -506,12 +544,12 @@ model_status model_get(model_instance *m, unsigned int vr, char type, double *va
     case VR_V: *value = d->out.v; break;
     case VR_A: *value = d->out.a; break;
     case VR_J: *value = d->out.j; break;
-    case VR_DONE: *value = d->out.done ? 1.0 : 0.0; break;
+    case VR_DONE: *value = program_done(d) ? 1.0 : 0.0; break;
     case VR_X_AL: *value = d->out.x_al; break;
     case VR_V_AL: *value = d->out.v_al; break;
     case VR_A_AL: *value = d->out.a_al; break;
     case VR_SEGMENT: *value = (double)d->out.segment; break;
-    case VR_BUSY: *value = d->out.done ? 0.0 : 1.0; break;
+    case VR_BUSY: *value = program_done(d) ? 0.0 : 1.0; break;
     case VR_STAGE: *value = (double)d->out.stage; break;
     case VR_MOTION_TIME: /* with a shaper: until its last delayed copy ends (the shaper of
                             the parametric move: a calculated parameter is fixed) */
@@ -527,6 +565,12 @@ model_status model_get(model_instance *m, unsigned int vr, char type, double *va
     case VR_D_REACHED: *value = d->first.d_reached; break;
     case VR_CMD_ERROR: *value = d->cmd_error ? 1.0 : 0.0; break;
     case VR_CMD_ERROR_ID: *value = (double)d->cmd_error_id; break;
+    case VR_ACTIVE:
+        *value = d->running_id != 0 && d->running_id == d->n_commands && !d->out.done ? 1.0 : 0.0;
+        break;
+    case VR_COMMAND_ABORTED: *value = d->command_aborted ? 1.0 : 0.0; break;
+    case VR_QUEUE_LENGTH: *value = (double)d->queue_n; break;
+    case VR_TIME_TO_REST: *value = time_to_rest(d); break;
     default: return model_fail(m, "get: internal error, no value for %s", v.name);
     }
     return ST_OK;
@@ -808,20 +852,20 @@ static int same_shaper_params(const djl_shaper_params *a, const djl_shaper_param
  * times of f_mode (jerk_source 2, 3): ST_OK, or refused (ST_DISCARD, cmd_error set and
  * logged, naming the input and its value).  Nothing else changes. */
 static model_status command_values_of(model_instance *m, double t, int stop, const int32_t Nf[4],
+                                      const model_cmd_inputs *c, double target, int from_rest,
                                       command_values *cv)
 {
     const model_data *d = &m->d;
-    const model_cmd_inputs *c = &d->cmd;
     const char *what = stop ? "stop" : "execute";
     static const char *const lim_name[3] = {"cmd_v_max", "cmd_a_max", "cmd_d_max"};
     static const char *const lim_unit[3] = {"m/s", "m/s2", "m/s2"};
     double lim[3], Te = d->p.Te;
     int i, any_T = 0;
     memset(cv, 0, sizeof *cv);
-    if (!stop && !(djl_isfinite(d->target) && djl_fabs(d->target) <= DJL_MAX_POSITION))
+    if (!stop && !(djl_isfinite(target) && djl_fabs(target) <= DJL_MAX_POSITION))
         return command_refused(m, CMD_ERR_TARGET, "DoStep at t = %.17g s: execute: invalid "
                                "target = %g m: must be finite and |target| <= %g m", t,
-                               d->target, DJL_MAX_POSITION);
+                               target, DJL_MAX_POSITION);
     lim[0] = c->v_max;
     lim[1] = c->a_max;
     lim[2] = c->d_max;
@@ -926,7 +970,7 @@ static model_status command_values_of(model_instance *m, double t, int stop, con
                                    from_cmd && strncmp(err.message, "shaper_", 7) == 0 ? "cmd_" : "",
                                    err.message);
         }
-        if (!(d->out.done && d->out.v == 0.0))
+        if (!from_rest && !(d->out.done && d->out.v == 0.0))
             return command_refused(m, CMD_ERR_SHAPER_WHILE_MOVING, "DoStep at t = %.17g s: "
                                    "execute: cmd_shaper = %d gives another shaper (%s) than the "
                                    "one in force (%s) while the output is not at rest (done = "
@@ -941,7 +985,7 @@ static model_status command_values_of(model_instance *m, double t, int stop, con
 /* A command done: its values become those of the move in progress (a stop: the shaper
  * stays), the limits' envelope grows, the error is cleared; an execute with another
  * shaper takes it from here (at rest: its copies of the time before read the rest). */
-static void command_latched(model_instance *m, int stop, const command_values *cv)
+static void command_latched(model_instance *m, int stop, const command_values *cv, double grid)
 {
     model_data *d = &m->d;
     d->mv.v_max = cv->v_max;
@@ -960,9 +1004,379 @@ static void command_latched(model_instance *m, int stop, const command_values *c
     memset(d->shaper_cursor, 0, sizeof d->shaper_cursor);
     djl_shaper_memory_clear(&d->mem);
     if (cv->sh.n > 0 && cv->sh.source == DJL_SHAPER_SOURCE_F_MODE)
-        djl_shaper_phase_rate(&d->mem, (double)d->n + d->phase, d->f_mode * d->p.Te);
-    model_log(m, ST_OK, DJL_LOG_LOGEVENTS, "execute: input shaper %s from here (cmd_shaper = "
-              "%d)", djl_shaper_names[cv->sp.kind], (int)d->cmd.shaper);
+        djl_shaper_phase_rate(&d->mem, grid, d->f_mode * d->p.Te);
+    model_log(m, ST_OK, DJL_LOG_LOGEVENTS, "execute: input shaper %s from here",
+              djl_shaper_names[cv->sp.kind]);
+}
+
+/* ------------------------------------------------------------------------ */
+/* buffer modes, the queue and min_duration (issue 34, docs/generator.md "Buffer modes") */
+
+/* An accepted stop or aborting execute: the waiting commands dropped; command_aborted set
+ * when it discarded a move in progress or waiting commands. */
+static void queue_discarded(model_instance *m, double t, int discards)
+{
+    model_data *d = &m->d;
+    if (d->queue_n > 0)
+        model_log(m, ST_OK, DJL_LOG_LOGEVENTS, "t = %.17g s: %d waiting command(s) discarded",
+                  t, (int)d->queue_n);
+    d->queue_n = 0;
+    d->queue_first = 0;
+    memset(d->queue, 0, sizeof d->queue);
+    if (discards) d->command_aborted = 1;
+}
+
+/* Seconds from the plan time u to the end of a trial plan replanned at u (its origin
+ * floor(u)), a shaper trailing it by t_sh s. */
+static double trial_duration(const model_data *d, const djl_plan *pl, double u, double t_sh)
+{
+    return ((djl_floor(u) + (double)pl->k_end) - u) * d->p.Te + t_sh;
+}
+
+/* min_duration (s): g's velocity limit lowered, if need be, to the fastest (to 1e-9 of it,
+ * bisection) with which the move replanned at u lasts at least min_d, a shaper trailing
+ * it by t_sh s.  Trials only; g unchanged when no trial plans (the command's own replan
+ * then says why) or the move lasts long enough already. */
+static void apply_min_duration(model_instance *m, double t, double u, djl_goal *g, double t_sh,
+                               double min_d)
+{
+    model_data *d = &m->d;
+    djl_replan_info info;
+    djl_error err;
+    djl_goal q = *g;
+    double lo, hi = g->v_max, dist;
+    int i;
+    if (!(min_d > 0.0)) return;
+    if (djl_replan(&d->plan, u, &q, &m->w.trial, &m->w.scratch, &info, &err) != DJL_OK) return;
+    if (trial_duration(d, &m->w.trial, u, t_sh) >= min_d) return;
+    dist = djl_fabs(m->w.trial.x_target) + djl_fabs(m->w.trial.p.v0) * d->p.Te;
+    lo = dist / min_d < hi ? dist / min_d : 0.5 * hi;
+    for (i = 0; i < 64; i++) { /* a velocity slow enough (d / min_d from rest) */
+        q.v_max = lo;
+        if (!(lo >= DJL_MIN_MAGNITUDE)) return;
+        if (djl_replan(&d->plan, u, &q, &m->w.trial, &m->w.scratch, &info, &err) == DJL_OK &&
+            trial_duration(d, &m->w.trial, u, t_sh) >= min_d)
+            break;
+        lo *= 0.5;
+    }
+    if (i == 64) return;
+    for (i = 0; i < 64 && hi - lo > 1e-9 * hi; i++) {
+        double mid = 0.5 * (lo + hi);
+        q.v_max = mid;
+        if (djl_replan(&d->plan, u, &q, &m->w.trial, &m->w.scratch, &info, &err) == DJL_OK &&
+            trial_duration(d, &m->w.trial, u, t_sh) >= min_d)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    model_log(m, ST_OK, DJL_LOG_LOGEVENTS, "t = %.17g s: min_duration = %g s: velocity limit "
+              "%.17g m/s instead of %.17g m/s", t, min_d, lo, g->v_max);
+    g->v_max = lo;
+}
+
+/* Whether the move of g replanned at u can end at its target moving at v (signed, m/s)
+ * within g's limits without turning back, and the next move (values nv, to x2) then land
+ * at rest from there within its own limits without turning back (it starts one sample
+ * after the target is passed: the replan's first free sample). */
+static int blend_ok(model_instance *m, double u, const djl_goal *g, double v,
+                    const command_values *nv, double x2)
+{
+    model_data *d = &m->d;
+    djl_plan *tr = &m->w.trial;
+    djl_goal q = *g;
+    djl_replan_info info;
+    djl_error err;
+    double sg = v > 0.0 ? 1.0 : -1.0, tol = 1e-9 * djl_fabs(v);
+    int i;
+    q.v_end = v;
+    q.no_stop_first = 1;
+    if (djl_replan(&d->plan, u, &q, tr, &m->w.scratch, &info, &err) != DJL_OK) return 0;
+    for (i = 0; i < tr->n_pieces; i++)
+        if (tr->piece[i].k > 0 && sg * tr->piece[i].v < -tol) return 0;
+    if (!(sg * ((x2 - g->target) - v * d->p.Te) > 0.0)) return 0;
+    /* the next move as it will be planned: replanned at the end of the trial, no stop */
+    memset(&q, 0, sizeof q);
+    q.kind = DJL_GOAL_TARGET;
+    q.target = x2;
+    memcpy(q.N, nv->N, sizeof q.N);
+    q.v_max = nv->v_max;
+    q.a_max = nv->a_max;
+    q.d_max = nv->d_max;
+    q.no_stop_first = 1;
+    if (djl_replan(tr, (double)tr->k_end, &q, tr, &m->w.scratch, &info, &err) != DJL_OK)
+        return 0;
+    for (i = 0; i < tr->n_pieces; i++)
+        if (sg * tr->piece[i].v < -tol) return 0;
+    return 1;
+}
+
+/* The speed the move of g (replanned at u) passes its target at, blending into the next
+ * (values nv, to x2): the lower of the two moves' velocity limits (vcap), or, when either
+ * cannot pass it that fast, the highest speed both can (to 1e-6 of vcap, bisection);
+ * signed.  0 (the next waits as buffered) when the two go opposite ways, the move is at
+ * its target, or no speed is possible. */
+static double blend_speed(model_instance *m, double u, const djl_goal *g, double vcap,
+                          const command_values *nv, double x2)
+{
+    model_data *d = &m->d;
+    djl_sample s;
+    int32_t cur = 0;
+    double sg, lo = 0.0, hi = vcap;
+    int i;
+    djl_eval(&d->plan, djl_floor(u), &cur, &s);
+    sg = g->target > s.x ? 1.0 : g->target < s.x ? -1.0 : 0.0;
+    if (sg == 0.0 || !(sg * (x2 - g->target) > 0.0) || !(vcap > 0.0)) return 0.0;
+    if (blend_ok(m, u, g, sg * vcap, nv, x2)) return sg * vcap;
+    for (i = 0; i < 48 && hi - lo > 1e-6 * vcap; i++) {
+        double mid = 0.5 * (lo + hi);
+        if (blend_ok(m, u, g, sg * mid, nv, x2))
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo >= DJL_MIN_MAGNITUDE ? sg * lo : 0.0;
+}
+
+/* The values of a waiting command, resolved without a word (a refusal is reported when
+ * it starts): 1 if valid. */
+static int queued_values(model_instance *m, const model_queued *q, const int32_t Nf[4],
+                         command_values *cv)
+{
+    model_data *d = &m->d;
+    int32_t e = d->cmd_error, id = d->cmd_error_id, w = m->category_on[DJL_LOG_LOGSTATUSWARNING];
+    model_status st;
+    m->category_on[DJL_LOG_LOGSTATUSWARNING] = 0;
+    st = command_values_of(m, 0.0, 0, Nf, &q->cmd, q->target, 1, cv);
+    m->category_on[DJL_LOG_LOGSTATUSWARNING] = w;
+    d->cmd_error = e;
+    d->cmd_error_id = id;
+    return st == ST_OK;
+}
+
+/* The move of an execute (values cv, to target) planned at u (plan time, t its time): the
+ * velocity limit lowered for min_d, ending moving when the first waiting command blends
+ * into it; latched as the move in progress.  *origin: the sample the new plan starts at. */
+static model_status plan_command(model_instance *m, double t, double u, const command_values *cv,
+                                 double target, double min_d, const int32_t Nf[4],
+                                 const char *why, int64_t *origin)
+{
+    model_data *d = &m->d;
+    djl_goal gc;
+    model_status st;
+    int kept = 0;
+    memset(&gc, 0, sizeof gc);
+    gc.kind = DJL_GOAL_TARGET;
+    gc.target = target;
+    memcpy(gc.N, cv->N, sizeof gc.N);
+    gc.v_max = cv->v_max;
+    gc.a_max = cv->a_max;
+    gc.d_max = cv->d_max;
+    apply_min_duration(m, t, u, &gc,
+                       cv->switch_shaper ? (cv->sh.n > 0 ? cv->sh.t_max : 0.0)
+                                         : shaper_tail(d) * d->p.Te,
+                       min_d);
+    if (d->queue_n > 0) {
+        const model_queued *nq = &d->queue[d->queue_first];
+        command_values nv;
+        if (nq->buffer_mode == BUFFER_MODE_BLENDING && queued_values(m, nq, Nf, &nv))
+            gc.v_end = blend_speed(m, u, &gc, djl_fmin(gc.v_max, nv.v_max), &nv, nq->target);
+    }
+    for (;;) {
+        if (d->jerk_source >= JERK_SOURCE_F_MODE) {
+            djl_goal gf = gc;
+            st = command_from_f_mode(m, t, u, &gf, why, origin, &kept);
+        } else {
+            st = replan_at(m, t, u, &gc, why, origin, &kept);
+        }
+        if (st != ST_DISCARD || gc.v_end == 0.0) break;
+        gc.v_end = 0.0; /* (a blend refused: the next command waits as buffered) */
+    }
+    if (st != ST_OK) return st;
+    command_latched(m, 0, cv, d->offset + (u - djl_floor(u))); /* (the new plan's grid) */
+    d->mv.v_max = gc.v_max;
+    d->goal = DJL_GOAL_TARGET;
+    d->goal_target = target;
+    if (gc.v_end != 0.0)
+        model_log(m, ST_OK, DJL_LOG_LOGEVENTS, "t = %.17g s: %s: passes target = %.17g m at "
+                  "%.17g m/s, blending into the next command", t, why, target, gc.v_end);
+    return ST_OK;
+}
+
+/* A blending command now first in the queue: the move in progress replanned to pass its
+ * target at the blend's speed (left as it is when none: the command then waits as
+ * buffered).  *origin as plan_command's. */
+static void reblend(model_instance *m, double t, double u, const int32_t Nf[4], int64_t *origin)
+{
+    model_data *d = &m->d;
+    const model_queued *nq = &d->queue[d->queue_first];
+    command_values nv;
+    djl_goal g;
+    int32_t e = d->cmd_error, id = d->cmd_error_id;
+    int kept = 0;
+    model_status st;
+    memset(&g, 0, sizeof g);
+    if (d->goal == DJL_GOAL_TARGET)
+        g.target = d->goal_target;
+    else if (d->goal == 0 && d->p.n_segments == 0 && d->p.v_e == 0.0)
+        g.target = d->p.x0 + d->p.distance;
+    else
+        return; /* a stop, or a parametric move that does not end at rest */
+    if (d->plan.v_target != 0.0 || !(u < (double)d->plan.k_end)) return;
+    if (!queued_values(m, nq, Nf, &nv)) return;
+    g.kind = DJL_GOAL_TARGET;
+    if (d->jerk_source >= JERK_SOURCE_F_MODE)
+        memcpy(g.N, Nf, sizeof g.N);
+    else
+        memcpy(g.N, d->mv.N, sizeof g.N);
+    g.v_max = d->mv.v_max;
+    g.a_max = d->mv.a_max;
+    g.d_max = d->mv.d_max;
+    g.keep_speed = 1;
+    g.v_end = blend_speed(m, u, &g, djl_fmin(d->mv.v_max, nv.v_max), &nv, nq->target);
+    if (g.v_end == 0.0) {
+        model_log(m, ST_OK, DJL_LOG_LOGEVENTS, "t = %.17g s: blending: the move in progress "
+                  "cannot pass its target towards %.17g m without stopping: the command waits "
+                  "as buffered", t, nq->target);
+        return;
+    }
+    if (d->jerk_source >= JERK_SOURCE_F_MODE)
+        st = command_from_f_mode(m, t, u, &g, "blending", origin, &kept);
+    else
+        st = replan_at(m, t, u, &g, "blending", origin, &kept);
+    if (st != ST_OK) { /* the move keeps its plan; the command waits as buffered */
+        *origin = 0;
+        d->cmd_error = e;
+        d->cmd_error_id = id;
+        return;
+    }
+    model_log(m, ST_OK, DJL_LOG_LOGEVENTS, "t = %.17g s: blending: the move in progress passes "
+              "its target %.17g m at %.17g m/s", t, g.target, g.v_end);
+}
+
+/* An execute edge at t (plan time u0): its buffer_mode and min_duration checked, then
+ * aborting (or nothing to wait for): planned now; buffered or blending: queued. */
+static model_status execute_edge(model_instance *m, double t, double u0, const int32_t Nf[4],
+                                 int64_t *origin)
+{
+    model_data *d = &m->d;
+    int32_t mode = d->buffer_mode;
+    int idle = d->queue_n == 0 && d->out.done && d->out.v == 0.0 && d->plan.v_target == 0.0;
+    command_values cv;
+    model_status st;
+    *origin = 0;
+    if (mode < BUFFER_MODE_ABORTING || mode > BUFFER_MODE_BLENDING)
+        return command_refused(m, CMD_ERR_BUFFER_MODE, "DoStep at t = %.17g s: execute: invalid "
+                               "buffer_mode = %d: must be 0 (aborting), 1 (buffered) or 2 "
+                               "(blending)", t, (int)mode);
+    if (!(d->min_duration == 0.0 || (djl_isfinite(d->min_duration) && d->min_duration > 0.0)))
+        return command_refused(m, CMD_ERR_MIN_DURATION, "DoStep at t = %.17g s: execute: invalid "
+                               "min_duration = %g s: must be 0 (none) or a finite duration > 0",
+                               t, d->min_duration);
+    if (mode == BUFFER_MODE_ABORTING || idle) {
+        int discards = !idle && (d->queue_n > 0 || !d->out.done);
+        int32_t kn = d->queue_n;
+        st = command_values_of(m, t, 0, Nf, &d->cmd, d->target, 0, &cv);
+        if (st != ST_OK) return st;
+        /* planned as if no command waited (it replaces them; they stay if it is refused) */
+        d->queue_n = 0;
+        st = plan_command(m, t, u0, &cv, d->target, d->min_duration, Nf, "execute", origin);
+        d->queue_n = kn;
+        if (st != ST_OK) return st;
+        queue_discarded(m, t, discards);
+        if (!discards) d->command_aborted = 0;
+        d->running_id = ++d->n_commands;
+        return ST_OK;
+    }
+    if (d->queue_n >= MODEL_QUEUE_CAPACITY)
+        return command_refused(m, CMD_ERR_QUEUE_FULL, "DoStep at t = %.17g s: execute: "
+                               "buffer_mode = %d: the queue is full (%d commands wait)", t,
+                               (int)mode, MODEL_QUEUE_CAPACITY);
+    st = command_values_of(m, t, 0, Nf, &d->cmd, d->target, 1, &cv);
+    if (st != ST_OK) return st;
+    if (mode == BUFFER_MODE_BLENDING && d->queue_n == 0 && cv.switch_shaper && !d->out.done)
+        return command_refused(m, CMD_ERR_SHAPER_WHILE_MOVING, "DoStep at t = %.17g s: execute: "
+                               "buffer_mode = 2 with cmd_shaper = %d: another shaper (%s) than "
+                               "the one of the move it blends from (%s): a shaper changes only "
+                               "from rest (use buffer_mode = 1)", t, (int)d->cmd.shaper,
+                               djl_shaper_names[cv.sp.kind], djl_shaper_names[d->mv.sp.kind]);
+    {
+        model_queued *q = &d->queue[(d->queue_first + d->queue_n) % MODEL_QUEUE_CAPACITY];
+        memset(q, 0, sizeof *q);
+        q->cmd = d->cmd;
+        q->target = d->target;
+        q->min_duration = d->min_duration;
+        q->buffer_mode = mode;
+        q->id = ++d->n_commands;
+        d->queue_n++;
+    }
+    d->cmd_error = 0;
+    d->cmd_error_id = 0;
+    d->command_aborted = 0;
+    model_log(m, ST_OK, DJL_LOG_LOGEVENTS, "t = %.17g s: execute to target = %.17g m %s: %d "
+              "command(s) waiting", t, d->target,
+              mode == BUFFER_MODE_BUFFERED ? "buffered" : "blending", (int)d->queue_n);
+    if (mode == BUFFER_MODE_BLENDING && d->queue_n == 1) reblend(m, t, u0, Nf, origin);
+    return ST_OK;
+}
+
+/* The plan time (samples) at which the move in progress has ended for the command waiting
+ * first: where it passes its target when it blends into it (the plan ends moving), else
+ * the first whole sample at which it rests, shaper copies included. */
+static double move_end(const model_data *d)
+{
+    double tail = shaper_tail(d);
+    if (d->plan.v_target != 0.0) return (double)d->plan.k_end;
+    return (double)d->plan.k_end + (tail > 0.0 ? -djl_floor(-tail) : 0.0);
+}
+
+/* The waiting commands whose turn comes within the step (plan times *u0 .. *u_end), each
+ * at the end of the move before it (move_end), in order.  A refused one is dropped
+ * (cmd_error) and the next one tried at the same time. */
+static model_status serve_queue(model_instance *m, double *u0, double *u_end,
+                                const int32_t Nf[4])
+{
+    model_data *d = &m->d;
+    int guard;
+    for (guard = 0; guard < MODEL_QUEUE_CAPACITY && d->queue_n > 0; guard++) {
+        double at = move_end(d), t;
+        model_queued q;
+        command_values cv;
+        int64_t origin = 0;
+        model_status st;
+        if (at < *u0) at = *u0;
+        if (!(at < *u_end)) break;
+        t = d->start_time + (d->offset + at) * d->p.Te;
+        q = d->queue[d->queue_first];
+        memset(&d->queue[d->queue_first], 0, sizeof q);
+        d->queue_first = (d->queue_first + 1) % MODEL_QUEUE_CAPACITY;
+        d->queue_n--;
+        if (d->queue_n == 0) d->queue_first = 0;
+        st = command_values_of(m, t, 0, Nf, &q.cmd, q.target, d->plan.v_target == 0.0, &cv);
+        if (st == ST_OK && d->plan.v_target != 0.0 && cv.switch_shaper)
+            st = command_refused(m, CMD_ERR_SHAPER_WHILE_MOVING, "t = %.17g s: blending: "
+                                 "another shaper (%s) than the one of the move it blends from "
+                                 "(%s): a shaper changes only from rest", t,
+                                 djl_shaper_names[cv.sp.kind], djl_shaper_names[d->mv.sp.kind]);
+        if (st == ST_OK) {
+            /* (cmd_error tells of the last edge: a start accepted leaves it as it is) */
+            int32_t e = d->cmd_error, id = d->cmd_error_id;
+            st = plan_command(m, t, at, &cv, q.target, q.min_duration, Nf,
+                              q.buffer_mode == BUFFER_MODE_BLENDING ? "blending" : "buffered",
+                              &origin);
+            if (st == ST_OK) {
+                d->cmd_error = e;
+                d->cmd_error_id = id;
+            }
+        }
+        if (st == ST_OK) {
+            d->running_id = q.id;
+            *u0 -= (double)origin;
+            *u_end -= (double)origin;
+        } else if (st != ST_DISCARD) {
+            return st;
+        }
+    }
+    return ST_OK;
 }
 
 /* The commands read at a DoStep (t, plan time u0, the step covering du samples):
@@ -1004,34 +1418,35 @@ static model_status commands(model_instance *m, double t, double u0, double du)
     } else {
         memcpy(g.N, d->mv.N, sizeof g.N);
     }
-    if (stop_edge || exec_edge) {
+    if (stop_edge) {
         command_values cv;
         djl_goal gc = g;
-        model_status st = command_values_of(m, t, stop_edge, g.N, &cv);
+        model_status st = command_values_of(m, t, 1, g.N, &d->cmd, d->target, 0, &cv);
         /* (a target that is not a position is kept out of the state's goal) */
         double goal_target = djl_isfinite(d->target) && djl_fabs(d->target) <= DJL_MAX_POSITION
                                  ? d->target : d->goal_target;
+        int discards = d->queue_n > 0 || !d->out.done;
         memcpy(gc.N, cv.N, sizeof gc.N);
         gc.v_max = cv.v_max;
         gc.a_max = cv.a_max;
         gc.d_max = cv.d_max;
         if (st != ST_OK) {
             /* refused: cmd_error set; the edges are taken, nothing else changes */
-        } else if (stop_edge && stop_kept(m, t, u0, &gc)) {
+        } else if (stop_kept(m, t, u0, &gc)) {
             d->goal = DJL_GOAL_STOP;
             d->goal_target = goal_target;
             d->cmd_error = 0;
             d->cmd_error_id = 0;
+            queue_discarded(m, t, discards);
         } else {
             int64_t origin = 0;
             int kept = 0;
-            gc.kind = stop_edge ? DJL_GOAL_STOP : DJL_GOAL_TARGET;
+            gc.kind = DJL_GOAL_STOP;
             gc.target = d->target;
             if (d->jerk_source >= JERK_SOURCE_F_MODE)
-                st = command_from_f_mode(m, t, u0, &gc, stop_edge ? "stop" : "execute", &origin,
-                                         &kept);
+                st = command_from_f_mode(m, t, u0, &gc, "stop", &origin, &kept);
             else
-                st = replan_at(m, t, u0, &gc, stop_edge ? "stop" : "execute", &origin, &kept);
+                st = replan_at(m, t, u0, &gc, "stop", &origin, &kept);
             if (st == ST_OK) {
                 d->goal = gc.kind;
                 d->goal_target = goal_target;
@@ -1039,14 +1454,28 @@ static model_status commands(model_instance *m, double t, double u0, double du)
                     d->cmd_error = 0;
                     d->cmd_error_id = 0;
                 } else {
-                    command_latched(m, stop_edge, &cv);
+                    command_latched(m, 1, &cv, 0.0);
                 }
+                queue_discarded(m, t, discards);
                 u0 -= (double)origin;
                 u_end = u0 + du;
             } else if (st != ST_DISCARD) {
                 return st;
             }
         }
+    } else if (exec_edge) {
+        int64_t origin = 0;
+        model_status st = execute_edge(m, t, u0, g.N, &origin);
+        if (st == ST_OK) {
+            u0 -= (double)origin;
+            u_end = u0 + du;
+        } else if (st != ST_DISCARD) {
+            return st;
+        }
+    }
+    if (d->queue_n > 0) {
+        model_status st = serve_queue(m, &u0, &u_end, g.N);
+        if (st != ST_OK) return st;
     }
     d->stop_seen = d->stop;
     d->execute_seen = d->execute;
@@ -1062,6 +1491,7 @@ static model_status commands(model_instance *m, double t, double u0, double du)
      * few per step. */
     g.kind = d->goal == DJL_GOAL_STOP ? DJL_GOAL_STOP : DJL_GOAL_TARGET;
     g.target = d->goal == 0 ? d->p.x0 + d->p.distance : d->goal_target;
+    g.v_end = g.kind == DJL_GOAL_TARGET ? d->plan.v_target : 0.0; /* a blend keeps its speed */
     g.no_stop_first = 1;
     g.keep_speed = 1;
     from = u0;
@@ -1102,6 +1532,8 @@ static model_status commands(model_instance *m, double t, double u0, double du)
         from = 1.0; /* from b = origin + 1 on, the steps the replan placed are right */
         now = 0;
     }
+    /* a move the jerk times of f_mode made end earlier within the step: its successor */
+    if (d->queue_n > 0) return serve_queue(m, &u0, &u_end, g.N);
     return ST_OK;
 }
 
@@ -1144,7 +1576,7 @@ model_status model_do_step(model_instance *m, double t, double h)
     if (!(whole + (double)d->n + phase <= (double)DJL_MAX_MOTION_SAMPLES))
         return model_fail(m, "DoStep: communication step %g s takes the FMU past %g samples of "
                           "Te = %g s", h, (double)DJL_MAX_MOTION_SAMPLES, d->p.Te);
-    if (d->execute != d->execute_seen || d->stop != d->stop_seen ||
+    if (d->execute != d->execute_seen || d->stop != d->stop_seen || d->queue_n > 0 ||
         d->jerk_source >= JERK_SOURCE_F_MODE) {
         model_status st = commands(m, t, (double)d->n - d->offset + d->phase,
                                    whole + phase - d->phase);
@@ -1279,6 +1711,50 @@ const char *model_plan_inconsistency(const djl_plan *pl, double vlim)
     return NULL;
 }
 
+/* The queue's part of a state (issue 34): counts and ids in range, each waiting command's
+ * mode, target and min_duration such as an edge accepts, its cmd_* inputs within their
+ * domains (its shaper's design is checked again when it starts).  NULL if sound. */
+static const char *queue_flaw(const model_data *d)
+{
+    int32_t i, k;
+    int64_t last;
+    if (d->command_aborted != 0 && d->command_aborted != 1)
+        return "command_aborted is neither 0 nor 1";
+    if (d->n_commands < 0 || d->running_id < 0 || d->running_id > d->n_commands)
+        return "the command count is out of range";
+    if (d->queue_n < 0 || d->queue_n > MODEL_QUEUE_CAPACITY || d->queue_first < 0 ||
+        d->queue_first >= MODEL_QUEUE_CAPACITY)
+        return "the queue's length or first entry is out of range";
+    last = d->running_id;
+    for (i = 0; i < d->queue_n; i++) {
+        const model_queued *q = &d->queue[(d->queue_first + i) % MODEL_QUEUE_CAPACITY];
+        const model_cmd_inputs *c = &q->cmd;
+        if (q->buffer_mode != BUFFER_MODE_BUFFERED && q->buffer_mode != BUFFER_MODE_BLENDING)
+            return "a waiting command is neither buffered nor blending";
+        if (q->id <= last || q->id > d->n_commands) return "a waiting command's id is out of order";
+        last = q->id;
+        if (!(djl_isfinite(q->target) && djl_fabs(q->target) <= DJL_MAX_POSITION))
+            return "a waiting command's target is out of range";
+        if (!(q->min_duration == 0.0 || (djl_isfinite(q->min_duration) && q->min_duration > 0.0)))
+            return "a waiting command's min_duration is invalid";
+        if (!((c->v_max == 0.0 || (djl_isfinite(c->v_max) && c->v_max > 0.0)) &&
+              (c->a_max == 0.0 || (djl_isfinite(c->a_max) && c->a_max > 0.0)) &&
+              (c->d_max == 0.0 || (djl_isfinite(c->d_max) && c->d_max > 0.0))))
+            return "a waiting command's limits are invalid";
+        if (c->profile < CMD_PROFILE_PARAMETER || c->profile > CMD_PROFILE_DJL ||
+            c->shaper < CMD_SHAPER_PARAMETER || c->shaper > CMD_SHAPER_NONE ||
+            c->shaper_n < 0 || c->shaper_n > DJL_MAX_SHAPER_IMPULSES)
+            return "a waiting command's profile or shaper is invalid";
+        for (k = 0; k < 4; k++)
+            if (c->T_F[k] != 0.0 && jerk_time_samples(c->T_F[k], d->p.Te) == 0)
+                return "a waiting command's jerk time is invalid";
+        for (k = 0; k < DJL_MAX_SHAPER_IMPULSES; k++)
+            if (!djl_isfinite(c->amplitude[k]) || !djl_isfinite(c->delay[k]))
+                return "a waiting command's shaper impulse is not finite";
+    }
+    return NULL;
+}
+
 const char *model_state_flaw(const model_data *d)
 {
     const djl_plan *pl = &d->plan;
@@ -1303,9 +1779,10 @@ const char *model_state_flaw(const model_data *d)
     /* (the inputs target and cmd_* take any value: a command checks them at its edge) */
     if (!(djl_isfinite(d->f_mode) && d->f_mode > 0.0)) return "the input f_mode is not > 0";
     if (d->cmd_error != 0 && d->cmd_error != 1) return "cmd_error is neither 0 nor 1";
-    if (d->cmd_error_id < 0 || d->cmd_error_id > CMD_ERR_NO_MOTION ||
+    if (d->cmd_error_id < 0 || d->cmd_error_id > CMD_ERR_QUEUE_FULL ||
         (d->cmd_error_id != 0) != (d->cmd_error != 0))
         return "cmd_error_id is not a code of cmd_error";
+    if ((why = queue_flaw(d)) != NULL) return why;
     if (!d->planned) return NULL; /* the plan is rebuilt before any use */
     if ((d->state & (MS_STEP | MS_TERMINATED)) && !(d->f_seen > 0.0))
         return "the f_mode last seen is not > 0"; /* an f_mode accepted (model_start) */

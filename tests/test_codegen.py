@@ -122,7 +122,8 @@ def test_enumeration_constants_are_the_spec():
     header = (fmu_src_dir() / "djl_vars.h").read_text()
     stems = {"Profile": "PROFILE", "ShortStage": "SHORT_STAGE", "JerkSource": "JERK_SOURCE",
              "Shaper": "SHAPER", "ShaperSource": "SHAPER_SOURCE",
-             "CmdProfile": "CMD_PROFILE", "CmdShaper": "CMD_SHAPER"}
+             "CmdProfile": "CMD_PROFILE", "CmdShaper": "CMD_SHAPER",
+             "BufferMode": "BUFFER_MODE"}
     assert set(stems) == set(spec.ENUMERATIONS)
     for name, items in spec.ENUMERATIONS.items():
         for item, value, _ in items:

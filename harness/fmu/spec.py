@@ -114,6 +114,12 @@ ENUMERATIONS: dict[str, tuple[tuple[str, int, str], ...]] = {
                       "shaper_delay)"),
         ("none", 5, "no input shaping for this move"),
     ),
+    "BufferMode": (
+        ("aborting", 0, "replaces the move in progress and every waiting command"),
+        ("buffered", 1, "waits until the moves before it have ended, then starts from rest"),
+        ("blending", 2, "waits as buffered; the move before it passes its target without "
+                        "stopping"),
+    ),
     "ShaperSource": (
         ("f_shaper", 1, "the impulses are timed for the parameter f_shaper"),
         ("f_mode", 2, "each impulse is timed by the phase of the input f_mode accumulated "
@@ -150,6 +156,10 @@ MAX_SHAPER_DELAY_SAMPLES = 4096
 SHAPER_AMPLITUDE_TOLERANCE = 1e-9
 """A custom shaper's amplitudes must sum to 1 within this (``DJL_SHAPER_SUM_TOLERANCE``)."""
 
+QUEUE_CAPACITY = 16
+"""Commands a buffered or blending execute can wait behind the move in progress
+(``MODEL_QUEUE_CAPACITY`` in ``fmu_base.h``)."""
+
 CMD_ERRORS: tuple[tuple[int, str, str, str], ...] = (
     (1, "TARGET", "target", "target is not finite or beyond 1e300 m in magnitude (an execute)"),
     (2, "V_MAX", "cmd_v_max", "cmd_v_max is neither 0 nor a finite velocity > 0"),
@@ -180,6 +190,12 @@ CMD_ERRORS: tuple[tuple[int, str, str, str], ...] = (
      "no motion within the command's limits reaches target (too far for them, or longer "
      "than the FMU's horizon; a stop: no stop within DJL_MAX_PLAN_END samples): the "
      "planner's reason is logged"),
+    (14, "BUFFER_MODE", "buffer_mode", "buffer_mode is not 0 (aborting), 1 (buffered) or 2 "
+     "(blending)"),
+    (15, "MIN_DURATION", "min_duration", "min_duration is neither 0 nor a finite duration > 0 "
+     "(s)"),
+    (16, "QUEUE_FULL", "buffer_mode",
+     f"a buffered or blending execute while {QUEUE_CAPACITY} commands already wait"),
 )
 """Codes of the output ``cmd_error_id`` (docs/generator.md, "Command errors"): code, C name
 (``CMD_ERR_<name>`` in ``djl_vars.h``), the input a message names, meaning.  0: no error."""
@@ -427,6 +443,29 @@ VARIABLES: tuple[Variable, ...] = (
     _i("cmd_shaper_delay", 700, "Real", 0.0, "Delay of each impulse of the commanded move's "
        f"custom shaper (cmd_shaper = 4, cmd_shaper_n > 0), >= 0, at most "
        f"{MAX_SHAPER_DELAY_SAMPLES} samples of Te", "s", size=MAX_SHAPER_IMPULSES),
+    # --- buffer modes and synchronisation (issue #34 items 2 and 4) ------------------
+    _i("buffer_mode", 78, "Enumeration", 0, "How the command of an execute edge (latched with "
+       "it) takes over: 0 = aborting (the move in progress and every waiting command are "
+       "replaced), 1 = buffered (it waits until the move in progress and the commands before "
+       "it have ended, shaper copies included, then starts from rest), 2 = blending (it "
+       "waits as buffered, but the move before it passes its target without stopping: at the "
+       "lower of the two moves' v_max, or the highest speed both can pass it at; "
+       "docs/generator.md, \"Buffer modes\"); another value is refused at the edge "
+       "(cmd_error)", min=0, max=2, declared_type="BufferMode"),
+    _i("min_duration", 79, "Real", 0.0, "Shortest duration of the commanded move, from its "
+       "start to its end (shaper copies included), latched at the execute edge: the move's "
+       "velocity limit is lowered (the fastest move lasting at least this); 0 = none; wire "
+       "another instance's time_to_rest to it to end together", "s"),
+    _o("active", 80, "Boolean", "True while the last command accepted (an execute) is the one "
+       "moving: started, not yet ended (shaper copies included)"),
+    _o("command_aborted", 81, "Boolean", "True once a move still in progress or waiting "
+       "commands were discarded by an aborting execute or a stop; an execute edge that "
+       "discards nothing clears it"),
+    _o("queue_length", 82, "Integer", "Commands waiting (buffered or blending) behind the move "
+       f"in progress, 0..{QUEUE_CAPACITY}", min=0, max=QUEUE_CAPACITY),
+    _o("time_to_rest", 83, "Real", "Time from now until the move in progress ends (shaper "
+       "copies included; a move blending into the next: until it passes its target); 0 at "
+       "rest.  Wired to another instance's min_duration, the two end together", "s"),
     _o("cmd_error", 76, "Boolean", "True when the last command (execute or stop edge) was "
        "refused: its values were invalid; the move in progress and every other value are "
        "untouched, the step returns OK; the next valid command clears it"),
