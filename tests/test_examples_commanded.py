@@ -141,3 +141,21 @@ def test_readme_fmpy_snippet(tmp_path, fmus, v, capsys):
     k14 = int(np.argmin(np.abs(t - 1.4)))
     assert x[k14] < x[ends[1]] < 0.4 and np.all(x[ends[1]:] == x[ends[1]])
     assert np.all(vel[ends[1]:] == 0.0) and not res["busy"][-1]
+
+
+def test_motion_program_example(tmp_path, capsys, fmus):
+    """Issue 34's example: a queued program (blends at the lower v_max, a buffered move
+    after) and two instances ending together through time_to_rest -> min_duration."""
+    mod = _in(tmp_path, lambda: runpy.run_path(str(EXAMPLES / "motion_program.py"),
+                                               run_name="__main__"))
+    out = capsys.readouterr().out
+    assert "passes 0.2 m at 0.500 m/s" in out and "passes 0.5 m at 0.500 m/s" in out
+    assert (tmp_path / "djl-fmu-out" / "motion_program.png").stat().st_size > 10_000
+    assert (tmp_path / "djl-fmu-out" / "axis_b_input.csv").read_text().startswith("time,")
+    for v in (2, 3):
+        p = mod["run_program"](fmu=fmus[v])
+        assert p["x"][-1] == pytest.approx(0.1, abs=1e-12) and p["done"][-1] == 1
+        assert p["queue_length"].max() == 3
+        a, b, wired = mod["synchronised"](fmu=fmus[v])
+        ends = [int(np.flatnonzero(np.abs(r["v"]) > 0)[-1]) + 1 for r in (a, b)]
+        assert 0 <= ends[1] - ends[0] <= 1 and wired > 0.5

@@ -22,7 +22,7 @@ from harness.fmu.runner import FMUError, GeneratorFMU
 ENUM_PARAMETERS = [v for v in spec.PARAMETERS if v.type == "Enumeration"]
 ENUM_ALIASED = [v for v in spec.VARIABLES if v.type == "Enumeration"]
 """Every Enumeration with an FMI 2 Integer alias: the parameters and (issue 34) the inputs
-cmd_profile, cmd_shaper."""
+cmd_profile, cmd_shaper, buffer_mode."""
 
 
 def _model_description_xml(fmu) -> ET.Element:
@@ -61,7 +61,7 @@ def test_fmi2_integer_aliases_declare_the_enumerations_values(fmu2):
     md = read_model_description(str(fmu2))
     by_name = {v.name: v for v in md.modelVariables}
     assert {v.name for v in ENUM_ALIASED} - {v.name for v in ENUM_PARAMETERS} == {
-        "cmd_profile", "cmd_shaper"}
+        "cmd_profile", "cmd_shaper", "buffer_mode"}
     for v in ENUM_ALIASED:
         alias, enum = by_name[v.name + "_code"], by_name[v.name]
         assert alias.type == "Integer" and enum.type == "Enumeration"

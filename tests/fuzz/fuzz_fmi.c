@@ -20,11 +20,15 @@
  *    times the sum of the shaper's |amplitudes| (a custom shaper may overshoot), up to
  *    rounding, the limits and the amplitudes being the largest of the parameters' and of
  *    every command the FMU accepted (cmd_error false after its edge); done == !busy;
- *    cmd_error_id is a code (0..CMD_ERR_NO_MOTION), 0 exactly when cmd_error is false;
+ *    cmd_error_id is a code (0..CMD_ERR_QUEUE_FULL), 0 exactly when cmd_error is false;
+ *    queue_length in 0..MODEL_QUEUE_CAPACITY, time_to_rest finite and >= 0, both 0 once
+ *    done;
  *  - a move the harness can follow (from initialisation, commands decoded as the FMU
  *    sees them, no state restored) that reports done rests on its goal: the parametric
  *    end (x0 + distances) when it ends at rest, a commanded target, at rest after a stop
- *    (a command refused with cmd_error leaves the goal as it was);
+ *    (a command refused with cmd_error leaves the goal as it was; a buffered or blending
+ *    command accepted makes its target the goal: the queue ends there; one refused when
+ *    its turn comes ends the following);
  *  - a state the FMU saved itself is accepted back (set, serialise, deserialise) and
  *    restores the outputs it was saved with.
  * Built with clang -fsanitize=fuzzer,address,undefined (tests/fuzz/build.sh) or, without
@@ -42,12 +46,15 @@
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 /* Variables of the table before issue 33 added table_n, table_samples, table_jerk, and
- * issue 34 the eleven per-command inputs and outputs after them. */
+ * issue 34 the eleven per-command inputs and outputs after them, then the six of its buffer
+ * modes and synchronisation (buffer_mode, min_duration, active, command_aborted,
+ * queue_length, time_to_rest). */
 #define FUZZ_OLD_VARS 50
 #define FUZZ_TABLE_VARS 3
-typedef char fuzz_old_vars_check[(DJL_N_VARS == FUZZ_OLD_VARS + FUZZ_TABLE_VARS + 11 &&
+typedef char fuzz_old_vars_check[(DJL_N_VARS == FUZZ_OLD_VARS + FUZZ_TABLE_VARS + 11 + 6 &&
                                    VR_TABLE_N == 65 && VR_TABLE_JERK == 2000 &&
-                                   VR_CMD_V_MAX == 70 && VR_CMD_ERROR_ID == 77) ? 1 : -1];
+                                   VR_CMD_V_MAX == 70 && VR_CMD_ERROR_ID == 77 &&
+                                   VR_BUFFER_MODE == 78 && VR_TIME_TO_REST == 83) ? 1 : -1];
 
 /* ------------------------------------------------------------------ the two layers */
 
@@ -405,6 +412,7 @@ typedef struct {
     double expect;  /* where a GOAL_PARAM / GOAL_TARGET move rests */
     double scale;   /* positions seen: the tolerance of the landing */
     int exec_seen, stop_seen; /* the Boolean inputs at the last step, as the FMU saw them */
+    int err_seen;   /* cmd_error after the last step */
     double t;       /* the FMU's time */
     int stepping;   /* Step Mode, the last step OK */
     double cmd_v, cmd_a, cmd_fac; /* the largest cmd_v_max, of cmd_a_max and cmd_d_max, and
@@ -498,8 +506,22 @@ static void check_step(fmu *f, follow *w)
     if (!w->stepping) return;
     FUZZ_CHECK(o.done == !o.busy, "done %d busy %d", o.done, o.busy);
     if (get_bool(f, VR_CMD_ERROR, &err) == 0 && get_int(f, VR_CMD_ERROR_ID, &id) == 0)
-        FUZZ_CHECK(id >= 0 && id <= CMD_ERR_NO_MOTION && (id != 0) == (err != 0),
+        FUZZ_CHECK(id >= 0 && id <= CMD_ERR_QUEUE_FULL && (id != 0) == (err != 0),
                    "cmd_error %d, cmd_error_id %lld", err, id);
+    {
+        long long ql = -1;
+        double ttr = NAN;
+        int act = -1, ab = -1;
+        if (get_int(f, VR_QUEUE_LENGTH, &ql) == 0)
+            FUZZ_CHECK(ql >= 0 && ql <= MODEL_QUEUE_CAPACITY && (!o.done || ql == 0),
+                       "queue_length %lld (done %d)", ql, o.done);
+        if (get_real(f, VR_TIME_TO_REST, &ttr) == 0)
+            FUZZ_CHECK(isfinite(ttr) && ttr >= 0.0 && (!o.done || ttr == 0.0),
+                       "time_to_rest %g (done %d)", ttr, o.done);
+        if (get_bool(f, VR_ACTIVE, &act) == 0 && get_bool(f, VR_COMMAND_ABORTED, &ab) == 0)
+            FUZZ_CHECK((act == 0 || act == 1) && (ab == 0 || ab == 1) && !(act && o.done),
+                       "active %d, command_aborted %d (done %d)", act, ab, o.done);
+    }
     (void)get_int(f, VR_SHAPER, &shaper);
     if (shaper == SHAPER_CUSTOM) {
         (void)get_int(f, VR_SHAPER_N, &n);
@@ -646,6 +668,26 @@ static double scaled(fuzz_reader *r, double x)
     }
 }
 
+/* Issue 34's buffer modes and min_duration: 0 buffer_mode set to any int8, 1 min_duration
+ * to a value of its scale or any value, 2 a buffered or blending move (target, mode,
+ * execute edge), 3 both back to 0. */
+static void queue_command(fmu *f, fuzz_reader *r, int what)
+{
+    switch (what) {
+    case 0: (void)set_int(f, VR_BUFFER_MODE, (long long)(int8_t)rd_u8(r), 1); break;
+    case 1: (void)set_real(f, VR_MIN_DURATION, scaled(r, 0.5)); break;
+    case 2:
+        (void)set_int(f, VR_BUFFER_MODE, 1 + rd_u8(r) % 2, 1);
+        (void)set_real(f, VR_TARGET, scaled(r, 1.0));
+        (void)set_bool(f, VR_EXECUTE, 1);
+        break;
+    default:
+        (void)set_int(f, VR_BUFFER_MODE, 0, 1);
+        (void)set_real(f, VR_MIN_DURATION, 0.0);
+        break;
+    }
+}
+
 /* Issue 34's per-command values: 0 one input cmd_* set to a value of its scale or any
  * value (an integer: any int8), 1 a move with limits, jerk times and a profile of its own
  * (execute edge), 2 a move with a custom shaper of its own (execute edge), 3 every cmd_*
@@ -783,6 +825,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 }
                 if (refused) {
                     /* the move in progress goes on */
+                } else if (!(ex && !w.exec_seen) && !(sp && !w.stop_seen) && !w.err_seen &&
+                           get_bool(&f, VR_CMD_ERROR, &refused) == 0 && refused) {
+                    w.tracked = 0; /* a waiting command refused when its turn came */
                 } else if (ex && !w.exec_seen && sp && !w.stop_seen) {
                     w.tracked = 0;
                 } else if (ex && !w.exec_seen) {
@@ -793,15 +838,22 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 }
                 w.exec_seen = ex;
                 w.stop_seen = sp;
+                w.err_seen = 0;
+                (void)get_bool(&f, VR_CMD_ERROR, &w.err_seen);
             }
             check_step(&f, &w);
             break;
         }
         case 7: { /* a command: a target and an execute edge, or a stop edge, or f_mode; from
-                   * a byte of 252 up (the corpus keeps its meaning), issue 34's values */
+                   * a byte of 252 up (the corpus keeps its meaning), issue 34's values; from
+                   * 248 to 251 its buffer modes and min_duration */
             uint8_t b = rd_u8(&r);
             if (b >= 252) {
                 per_command(&f, &r, b - 252, Te);
+                break;
+            }
+            if (b >= 248) {
+                queue_command(&f, &r, b - 248);
                 break;
             }
             switch (b % 4) {
