@@ -1392,6 +1392,71 @@ static void run_issue21_long_stops(void)
     }
 }
 
+/* Issue 34: a state holding a queue (a blending and two buffered commands waiting behind a
+ * move) round-trips and replays; each field of the queue changed to what no edge makes,
+ * resealed, is refused naming what is wrong. */
+static void run_forged_queue(void)
+{
+    static model_data d;
+    fmi2Component c = make("forged-queue");
+    fmi2FMUstate s = NULL, s2 = NULL;
+    fmi2Byte *buf, *forged;
+    size_t size = 0;
+    double t = 0.0;
+    int i;
+    static const double tg[4] = {0.3, 0.5, 0.2, 0.25};
+    static const int mode[4] = {0, 2, 1, 1};
+    CHECK(fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) == fmi2OK,
+          "init: %s", last_message);
+    for (i = 0; i < 4; i++) {
+        set_int(c, VR_BUFFER_MODE, mode[i]);
+        set_real(c, VR_TARGET, tg[i]);
+        set_bool(c, VR_EXECUTE, 1);
+        CHECK(fmi2DoStep(c, t, 1e-3, fmi2True) == fmi2OK, "edge %d: %s", i, last_message);
+        t += 1e-3;
+        set_bool(c, VR_EXECUTE, 0);
+        CHECK(fmi2DoStep(c, t, 1e-3, fmi2True) == fmi2OK, "step %d: %s", i, last_message);
+        t += 1e-3;
+    }
+    CHECK(get_bool(c, VR_CMD_ERROR) == 0, "every command accepted: %s", last_message);
+    CHECK(fmi2GetFMUstate(c, &s) == fmi2OK, "get state: %s", last_message);
+    CHECK(fmi2SerializedFMUstateSize(c, s, &size) == fmi2OK, "size");
+    buf = (fmi2Byte *)malloc(size);
+    forged = (fmi2Byte *)malloc(model_state_max_size());
+    CHECK(buf != NULL && forged != NULL, "malloc");
+    CHECK(fmi2SerializeFMUstate(c, s, buf, size) == fmi2OK, "serialise: %s", last_message);
+    CHECK(fmi2DeSerializeFMUstate(c, buf, size, &s2) == fmi2OK, "its own state: %s",
+          last_message);
+    model_state_unpack(buf, &d);
+    CHECK(d.queue_n == 3 && d.n_commands == 4 && d.running_id == 1, "the queue: %d waiting, "
+          "%lld commands, running %lld", (int)d.queue_n, (long long)d.n_commands,
+          (long long)d.running_id);
+    FORGE(d.queue_n = MODEL_QUEUE_CAPACITY + 1, "queue's length");
+    FORGE(d.queue_first = -1, "queue's length or first entry");
+    FORGE(d.queue[d.queue_first].buffer_mode = 0, "neither buffered nor blending");
+    FORGE(d.queue[d.queue_first].target = NAN, "waiting command's target");
+    FORGE(d.queue[d.queue_first].min_duration = -1.0, "waiting command's min_duration");
+    FORGE(d.queue[d.queue_first].cmd.v_max = -2.0, "waiting command's limits");
+    FORGE(d.queue[d.queue_first].cmd.shaper = 9, "waiting command's profile or shaper");
+    FORGE(d.queue[d.queue_first].cmd.T_F[2] = 1e-9, "waiting command's jerk time");
+    FORGE(d.queue[d.queue_first].cmd.delay[7] = INFINITY, "shaper impulse is not finite");
+    FORGE(d.queue[d.queue_first + 1].id = d.queue[d.queue_first].id, "id is out of order");
+    FORGE(d.running_id = d.n_commands + 1, "command count");
+    FORGE(d.command_aborted = 2, "command_aborted");
+    FORGE(d.cmd_error_id = CMD_ERR_QUEUE_FULL + 1, "cmd_error_id");
+    /* its own state replays: the queue runs to the last target */
+    CHECK(fmi2SetFMUstate(c, s2) == fmi2OK, "set its own state: %s", last_message);
+    for (i = 0; i < 6000 && !get_bool(c, VR_DONE); i++, t += 1e-3)
+        CHECK(fmi2DoStep(c, t, 1e-3, fmi2True) == fmi2OK, "step %d: %s", i, last_message);
+    CHECK(get_bool(c, VR_DONE) && fabs(get_real(c, VR_X) - 0.25) <= 1e-12,
+          "the queue ran to 0.25 m: x = %.17g", get_real(c, VR_X));
+    free(buf);
+    free(forged);
+    fmi2FreeFMUstate(c, &s);
+    fmi2FreeFMUstate(c, &s2);
+    fmi2FreeInstance(c);
+}
+
 /* Issue 21, FMI run 11 (tests/fuzz/corpus/fmi/crash-36b2..., -44f5..., -c866...): a state
  * whose plan.level0 was forged from 0 to 0.56 m/s2 and resealed passed every check of a
  * value against its limit; a stop replanned from it ended a stage that was not running,
@@ -1828,6 +1893,7 @@ int main(int argc, char **argv)
     run_issue21_landing();
     run_issue21_long_stops();
     run_issue21_forged_plan();
+    run_forged_queue();
     run_plan_consistency();
     run_table();
     run_entry_points();
