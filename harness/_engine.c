@@ -30,11 +30,14 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "djl_core.h"
 #define DJL_VARS_PARAMETERS /* djl_param_table: where each FMU parameter is stored */
+#define DJL_VARS_TABLES     /* djl_var_table: every variable (run_program) */
 #include "djl_vars.h"
+#include "fmu_instance.h"   /* the FMU's model, for run_program (no FMI layer) */
 
 /* 2 pi as Python's 2.0 * math.pi (doubling is exact) */
 #define DJL_TWO_PI 6.283185307179586476925286766559
@@ -1440,6 +1443,200 @@ fail_f:
 
 /* ---------------------------------------------------------------- module */
 
+/* ------------------------------------------------- programs of commands (issue 34) */
+
+/* The FMU's own model (fmu_model.c under fmu_instance.c, no FMI layer): a whole program of
+ * commands stepped in C, the same code and arithmetic as the FMU's DoStep. */
+
+typedef struct {
+    char message[1100]; /* the last error the model logged */
+} program_log;
+
+static void program_logger(void *env, model_status status, const char *category,
+                           const char *message)
+{
+    program_log *lg = (program_log *)env;
+    (void)category;
+    if (status >= ST_ERROR && lg && message) {
+        strncpy(lg->message, message, sizeof lg->message - 1);
+        lg->message[sizeof lg->message - 1] = '\0';
+    }
+}
+
+static const djl_var_info *program_var(const char *name, char causality)
+{
+    size_t i;
+    for (i = 0; i < sizeof djl_var_table / sizeof djl_var_table[0]; i++)
+        if (djl_var_table[i].causality == causality && !strcmp(djl_var_table[i].name, name))
+            return &djl_var_table[i];
+    return NULL;
+}
+
+/* Set every entry of a dict of variables of the given causality ('p' parameters, 'i'
+ * inputs): a number, or a sequence for an array.  -1 with a Python error. */
+static int program_set(model_instance *m, PyObject *dict, char causality, const char *what,
+                       program_log *lg)
+{
+    PyObject *key, *value;
+    Py_ssize_t pos = 0;
+    if (!PyDict_Check(dict)) {
+        PyErr_Format(PyExc_TypeError, "%s must be a dict of FMU variable names", what);
+        return -1;
+    }
+    while (PyDict_Next(dict, &pos, &key, &value)) {
+        const djl_var_info *v;
+        const char *k;
+        char type;
+        double x[DJL_MAX_TABLE];
+        unsigned int i, n = 1;
+        if (!PyUnicode_Check(key)) {
+            PyErr_Format(PyExc_TypeError, "%s: names must be strings, got %R", what, key);
+            return -1;
+        }
+        k = PyUnicode_AsUTF8AndSize(key, NULL);
+        if (!k) return -1;
+        v = program_var(k, causality);
+        if (!v) {
+            PyErr_Format(PyExc_KeyError, "%s: %R is not an FMU %s", what, key,
+                         causality == 'p' ? "parameter" : "input");
+            return -1;
+        }
+        type = v->type == 'E' ? 'I' : v->type;
+        if (v->size > 1) {
+            if (get_array(value, k, 'R', x, v->size) < 0) return -1;
+            n = v->size;
+        } else if (get_double(value, k, &x[0]) < 0) {
+            return -1;
+        }
+        for (i = 0; i < n; i++) {
+            double xi = x[i];
+            if (type == 'B') xi = xi != 0.0;
+            if (model_set(m, v->vr + i, type, xi) != ST_OK) {
+                PyErr_Format(PlanError, "%s: %s refused: %s", what, k, lg->message);
+                return -1;
+            }
+        }
+    }
+    return 0;
+}
+
+/* run_program(params, program, count, h, out, start_time=0.0): see engine_methods. */
+static PyObject *engine_run_program(PyObject *self, PyObject *args, PyObject *kwds)
+{
+    static char *kwlist[] = {"params", "program", "count", "h", "out", "start_time", NULL};
+    PyObject *params, *program, *out_obj, *seq = NULL;
+    Py_ssize_t count, n_cmd, c = 0, k;
+    double h, start_time = 0.0, t;
+    Py_buffer view;
+    model_instance *m;
+    program_log lg;
+    unsigned int outs[64];
+    char otype[64];
+    int n_out = 0;
+    size_t i;
+    (void)self;
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "OOndO|d", kwlist, &params, &program, &count,
+                                     &h, &out_obj, &start_time))
+        return NULL;
+    for (i = 0; i < sizeof djl_var_table / sizeof djl_var_table[0] && n_out < 64; i++)
+        if (djl_var_table[i].causality == 'o') {
+            outs[n_out] = djl_var_table[i].vr;
+            otype[n_out++] = djl_var_table[i].type == 'E' ? 'I' : djl_var_table[i].type;
+        }
+    if (count < 0) {
+        PyErr_SetString(PyExc_ValueError, "count must be >= 0");
+        return NULL;
+    }
+    seq = PySequence_List(program); /* (a sequence of (step, inputs) pairs) */
+    if (!seq) return NULL;
+    n_cmd = PyList_Size(seq);
+    if (get_out_buffer(out_obj, &view, (Py_ssize_t)n_out * count, "out") < 0) {
+        Py_DECREF(seq);
+        return NULL;
+    }
+    m = (model_instance *)calloc(1, sizeof *m);
+    if (!m) {
+        PyBuffer_Release(&view);
+        Py_DECREF(seq);
+        return PyErr_NoMemory();
+    }
+    lg.message[0] = '\0';
+    model_init(m, 3, "engine", program_logger, &lg, 0, calloc, free);
+    if (program_set(m, params, 'p', "params", &lg) < 0) goto fail;
+    if (model_setup(m, start_time) != ST_OK || model_enter_init(m) != ST_OK ||
+        model_exit_init(m) != ST_OK) {
+        PyErr_Format(PlanError, "initialisation refused: %s", lg.message);
+        goto fail;
+    }
+    t = start_time;
+    for (k = 0; k < count; k++) {
+        double *row = (double *)view.buf;
+        /* the inputs of the commands at this step, in order */
+        while (c < n_cmd) {
+            PyObject *item = PyList_GetItem(seq, c), *inputs;
+            Py_ssize_t at;
+            if (!PyTuple_Check(item) || PyTuple_Size(item) != 2) {
+                PyErr_Format(PyExc_TypeError, "program[%zd] must be a (step, inputs) tuple", c);
+                goto fail;
+            }
+            at = PyLong_AsSsize_t(PyTuple_GetItem(item, 0));
+            if (at == -1 && PyErr_Occurred()) goto fail;
+            if (at < k) {
+                PyErr_Format(PyExc_ValueError, "program[%zd]: step %zd is out of order", c, at);
+                goto fail;
+            }
+            if (at > k) break;
+            inputs = PyTuple_GetItem(item, 1);
+            if (program_set(m, inputs, 'i', "inputs", &lg) < 0) goto fail;
+            c++;
+        }
+        if (model_do_step(m, t, h) != ST_OK) {
+            PyErr_Format(PlanError, "DoStep at t = %.17g s refused: %s", t, lg.message);
+            goto fail;
+        }
+        t = m->d.t_now;
+        for (i = 0; i < (size_t)n_out; i++) {
+            double x = 0.0;
+            (void)model_get(m, outs[i], otype[i], &x);
+            row[(Py_ssize_t)i * count + k] = x;
+        }
+    }
+    model_free(m);
+    free(m);
+    PyBuffer_Release(&view);
+    Py_DECREF(seq);
+    Py_RETURN_NONE;
+fail:
+    model_free(m);
+    free(m);
+    PyBuffer_Release(&view);
+    Py_DECREF(seq);
+    return NULL;
+}
+
+/* output_names() -> tuple: the FMU's outputs, in the rows run_program writes. */
+static PyObject *engine_output_names(PyObject *self, PyObject *noargs)
+{
+    PyObject *names = PyList_New(0), *tup;
+    size_t i;
+    (void)self;
+    (void)noargs;
+    if (!names) return NULL;
+    for (i = 0; i < sizeof djl_var_table / sizeof djl_var_table[0]; i++) {
+        if (djl_var_table[i].causality != 'o') continue;
+        PyObject *s = PyUnicode_FromString(djl_var_table[i].name);
+        if (!s || PyList_Append(names, s) < 0) {
+            Py_XDECREF(s);
+            Py_DECREF(names);
+            return NULL;
+        }
+        Py_DECREF(s);
+    }
+    tup = PyList_AsTuple(names);
+    Py_DECREF(names);
+    return tup;
+}
+
 static PyMethodDef engine_methods[] = {
     {"plan", (PyCFunction)(void (*)(void))engine_plan, METH_VARARGS | METH_KEYWORDS,
      "plan(params, start_time=0.0) -> Plan: plan a move with the generator core; params are FMU "
@@ -1462,6 +1659,15 @@ static PyMethodDef engine_methods[] = {
      "adjoint_sums(h, f, zeta, gain, n, S, factor=1.0): the adjoint of adjoint_modes as suffix sums, "
      "S[r, i, (a, k a, j), k] = sum over k' >= k of psi[r, k', i, .] (times k' for the "
      "second); S: (R, 2, 3, n + 1); frequencies f * factor."},
+    {"run_program", (PyCFunction)(void (*)(void))engine_run_program,
+     METH_VARARGS | METH_KEYWORDS,
+     "run_program(params, program, count, h, out, start_time=0.0): the FMU's model (its "
+     "DoStep, no FMI layer) initialised with params (FMU parameter names), then count steps "
+     "of h s; program: (step, inputs) pairs in step order, the inputs (FMU input names) set "
+     "before that step; out[i, k]: output i (output_names()) after step k. Raises PlanError "
+     "as the FMU refuses."},
+    {"output_names", engine_output_names, METH_NOARGS,
+     "output_names() -> tuple: the FMU's outputs, in the order of run_program's rows."},
     {NULL, NULL, 0, NULL},
 };
 
