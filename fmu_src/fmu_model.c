@@ -1153,6 +1153,18 @@ static int queued_values(model_instance *m, const model_queued *q, const int32_t
     return st == ST_OK;
 }
 
+/* A blend keeps the shaper: the next command's (nv) must be the one in force (sp), else it
+ * waits as buffered (a shaper changes from rest).  1 if it may blend. */
+static int blend_shaper_ok(model_instance *m, double t, const command_values *nv,
+                           const djl_shaper_params *sp)
+{
+    if (same_shaper_params(&nv->sp, sp)) return 1;
+    model_log(m, ST_OK, DJL_LOG_LOGEVENTS, "t = %.17g s: blending: the next command has another "
+              "shaper (%s) than the move before it (%s): it waits as buffered (a shaper changes "
+              "from rest)", t, djl_shaper_names[nv->sp.kind], djl_shaper_names[sp->kind]);
+    return 0;
+}
+
 /* The move of an execute (values cv, to target) planned at u (plan time, t its time): the
  * velocity limit lowered for min_d, ending moving when the first waiting command blends
  * into it; latched as the move in progress.  *origin: the sample the new plan starts at. */
@@ -1178,7 +1190,8 @@ static model_status plan_command(model_instance *m, double t, double u, const co
     if (d->queue_n > 0) {
         const model_queued *nq = &d->queue[d->queue_first];
         command_values nv;
-        if (nq->buffer_mode == BUFFER_MODE_BLENDING && queued_values(m, nq, Nf, &nv))
+        if (nq->buffer_mode == BUFFER_MODE_BLENDING && queued_values(m, nq, Nf, &nv) &&
+            blend_shaper_ok(m, t, &nv, cv->switch_shaper ? &cv->sp : &d->mv.sp))
             gc.v_end = blend_speed(m, u, &gc, djl_fmin(gc.v_max, nv.v_max), &nv, nq->target);
     }
     for (;;) {
@@ -1222,7 +1235,7 @@ static void reblend(model_instance *m, double t, double u, const int32_t Nf[4], 
     else
         return; /* a stop, or a parametric move that does not end at rest */
     if (d->plan.v_target != 0.0 || !(u < (double)d->plan.k_end)) return;
-    if (!queued_values(m, nq, Nf, &nv)) return;
+    if (!queued_values(m, nq, Nf, &nv) || !blend_shaper_ok(m, t, &nv, &d->mv.sp)) return;
     g.kind = DJL_GOAL_TARGET;
     if (d->jerk_source >= JERK_SOURCE_F_MODE)
         memcpy(g.N, Nf, sizeof g.N);
@@ -1293,12 +1306,6 @@ static model_status execute_edge(model_instance *m, double t, double u0, const i
                                (int)mode, MODEL_QUEUE_CAPACITY);
     st = command_values_of(m, t, 0, Nf, &d->cmd, d->target, 1, &cv);
     if (st != ST_OK) return st;
-    if (mode == BUFFER_MODE_BLENDING && d->queue_n == 0 && cv.switch_shaper && !d->out.done)
-        return command_refused(m, CMD_ERR_SHAPER_WHILE_MOVING, "DoStep at t = %.17g s: execute: "
-                               "buffer_mode = 2 with cmd_shaper = %d: another shaper (%s) than "
-                               "the one of the move it blends from (%s): a shaper changes only "
-                               "from rest (use buffer_mode = 1)", t, (int)d->cmd.shaper,
-                               djl_shaper_names[cv.sp.kind], djl_shaper_names[d->mv.sp.kind]);
     {
         model_queued *q = &d->queue[(d->queue_first + d->queue_n) % MODEL_QUEUE_CAPACITY];
         memset(q, 0, sizeof *q);
@@ -1374,6 +1381,22 @@ static model_status serve_queue(model_instance *m, double *u0, double *u_end,
             *u_end -= (double)origin;
         } else if (st != ST_DISCARD) {
             return st;
+        } else if (d->queue_n == 0 && d->plan.v_target != 0.0) {
+            /* the move it blended from ends moving and nothing follows: it stops (with its
+             * own values), rather than cruise on */
+            djl_goal gs;
+            int kept = 0;
+            memset(&gs, 0, sizeof gs);
+            gs.kind = DJL_GOAL_STOP;
+            memcpy(gs.N, d->mv.N, sizeof gs.N);
+            gs.v_max = d->mv.v_max;
+            gs.a_max = d->mv.a_max;
+            gs.d_max = d->mv.d_max;
+            if (replan_at(m, t, at, &gs, "blending refused: stop", &origin, &kept) == ST_OK) {
+                d->goal = DJL_GOAL_STOP;
+                *u0 -= (double)origin;
+                *u_end -= (double)origin;
+            }
         }
     }
     return ST_OK;

@@ -268,6 +268,18 @@ def test_blending_the_other_way_stops_in_between(g):
     assert x[ends[1]] == pytest.approx(0.1, abs=1e-12)
 
 
+def test_blending_with_another_shaper_waits_as_buffered(g):
+    """B asks for a ZV shaper while A has none: a shaper changes only from rest, so B does
+    not blend: the axis rests at A's target, then B runs shaped; no error."""
+    r = _blend(g, 0.4, 0.8, {}, {"cmd_shaper": 1})
+    x, v = r.col("x"), r.col("v")
+    moving = np.abs(v) > 0
+    ends = np.flatnonzero(moving[:-1] & ~moving[1:]) + 1
+    assert len(ends) == 2 and x[ends[0]] == pytest.approx(0.4, abs=1e-12)
+    assert x[-1] == pytest.approx(0.8, abs=1e-12)
+    assert any("waits as buffered" in m.message for m in g.log)
+
+
 def test_a_chain_of_blends_lands_on_the_last_target(g):
     """Four moves blended one after another (given at once): the axis passes 0.2, 0.5 and
     0.9 m without stopping, at the lower v_max of each pair, and rests on 1.0 m."""
