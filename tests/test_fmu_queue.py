@@ -268,6 +268,17 @@ def test_blending_the_other_way_stops_in_between(g):
     assert x[ends[1]] == pytest.approx(0.1, abs=1e-12)
 
 
+def test_blending_behind_the_parametric_move(g):
+    """The parametric move (distance 0.4 m from t = 0) followed by a blending command to
+    0.9 m at v_max 0.5: the axis passes 0.4 m at 0.5 m/s, lands on 0.9 m."""
+    r = Run(g, {"distance": 0.4})
+    r.play(script(cmd(5, 0.9, BLENDING, cmd_v_max=0.5)), 3000)
+    assert not r.col("cmd_error").any()
+    k = _pass_sample(r, 0.4)
+    assert r.col("v")[k] == pytest.approx(0.5, rel=1e-12)
+    assert r.col("x")[-1] == pytest.approx(0.9, abs=1e-12)
+
+
 def test_blending_with_another_shaper_waits_as_buffered(g):
     """B asks for a ZV shaper while A has none: a shaper changes only from rest, so B does
     not blend: the axis rests at A's target, then B runs shaped; no error."""

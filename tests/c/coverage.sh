@@ -20,7 +20,7 @@ cd "$(dirname "$0")/../.."
 ROOT=$(pwd)
 COV=${COV_DIR:-/tmp/djl-coverage}
 PY=${PYTHON:-python}
-COV_PYTEST=${COV_PYTEST-"tests/test_fmu_interface.py tests/test_fmu_commands.py tests/test_fmu_shaper.py tests/test_hostile_inputs.py tests/test_fmu_artefacts.py tests/test_fmu_table.py tests/test_fmu_cmd.py tests/test_fmu_queue.py"}
+COV_PYTEST=${COV_PYTEST-"tests/test_fmu_interface.py tests/test_fmu_commands.py tests/test_fmu_shaper.py tests/test_hostile_inputs.py tests/test_fmu_artefacts.py tests/test_fmu_table.py tests/test_fmu_cmd.py tests/test_fmu_queue.py tests/test_program_engines.py"}
 FMI=$($PY -c 'from harness.fmu.build import fmi_include_dir; print(fmi_include_dir())')
 rm -rf "$COV"
 mkdir -p "$COV/obj" "$COV/bin" "$COV/fmu2" "$COV/fmu3"
