@@ -7,7 +7,8 @@
  *    0.05 s, three segments, an input shaper timed by f_mode after a replan (both rings of
  *    its memory in use), jerk_source 3 after a replan, AL after a
  *    stop, a state saved before initialisation; and, since issue 33, a replayed table
- *    (profile 4) mid-motion with a ZV shaper, and a table after a stop), patched by the
+ *    (profile 4) mid-motion with a ZV shaper, and a table after a stop; since issue 34 a
+ *    blending command and a buffered one waiting behind a move), patched by the
  *    input (bytes, 4- and
  *    8-byte words, doubles from the table of fuzz_common.h; half of them within the plan
  *    and the values around it), then mostly sealed again with a valid checksum, as a
@@ -26,7 +27,7 @@
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-#define N_BASE 8
+#define N_BASE 9
 
 static void logger(fmi2ComponentEnvironment e, fmi2String n, fmi2Status s, fmi2String c,
                    fmi2String m, ...)
@@ -124,7 +125,7 @@ static void make_bases(void)
             set_real(c, VR_F_MODE, 9.0);
         } else if (i == 4) {
             set_int(c, VR_PROFILE, PROFILE_AL);
-        } else if (i >= 6) { /* a table: +J, 0, -J, -J, 0, +J (J = 200 m/s3): 6.656 mm */
+        } else if (i == 6 || i == 7) { /* a table: +J, 0, -J, -J, 0, +J (J = 200 m/s3): 6.656 mm */
             static const int n[6] = {20, 12, 20, 20, 12, 20};
             static const double j[6] = {200.0, 0.0, -200.0, -200.0, 0.0, 200.0};
             int q;
@@ -150,8 +151,20 @@ static void make_bases(void)
         }
         FUZZ_CHECK(fmi2EnterInitializationMode(c) == fmi2OK, "enter");
         FUZZ_CHECK(fmi2ExitInitializationMode(c) == fmi2OK, "exit");
-        steps(c, i == 0 ? 50 : i >= 6 ? 30 : 120, 1e-3);
-        if (i == 2) { /* a replan: the shaper keeps the past of the plan it replaces */
+        steps(c, i == 0 ? 50 : i == 6 || i == 7 ? 30 : 120, 1e-3);
+        if (i == 8) { /* a queue: the move blends into the next, a buffered one waits */
+            set_real(c, VR_TARGET, 0.6);
+            set_int(c, VR_BUFFER_MODE, BUFFER_MODE_BLENDING);
+            set_bool(c, VR_EXECUTE, 1);
+            steps(c, 2, 1e-3);
+            set_bool(c, VR_EXECUTE, 0);
+            steps(c, 1, 1e-3);
+            set_real(c, VR_TARGET, 0.1);
+            set_int(c, VR_BUFFER_MODE, BUFFER_MODE_BUFFERED);
+            set_real(c, VR_MIN_DURATION, 0.8);
+            set_bool(c, VR_EXECUTE, 1);
+            steps(c, 2, 1e-3);
+        } else if (i == 2) { /* a replan: the shaper keeps the past of the plan it replaces */
             set_real(c, VR_F_MODE, 12.0);
             set_real(c, VR_TARGET, 0.2);
             set_bool(c, VR_EXECUTE, 1);
@@ -246,9 +259,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     r.i = 0;
     mode = rd_u8(&r);
     /* the six bases before issue 33 as they were decoded (the corpus keeps its meaning),
-     * the table's from a byte of 252 up */
+     * the table's from a byte of 252 up, the queue's (issue 34) from 248 to 251 */
     which = rd_u8(&r);
-    which = which >= 252 ? 6 + which % 2 : which % 6;
+    which = which >= 252 ? 6 + which % 2 : which >= 248 ? 8 : which % 6;
     if (mode % 8 == 0) {
         accepted = fmi2DeSerializeFMUstate(inst, (const fmi2Byte *)data + 2,
                                            size >= 2 ? size - 2 : 0, &s) == fmi2OK;
