@@ -160,7 +160,7 @@ typedef enum {
     CMD_ERR_SHAPER_WHILE_MOVING = 12, /* cmd_shaper: another shaper than the one in force while the output is not at rest (done false, or v != 0): a shaper changes only from rest */
     CMD_ERR_NO_MOTION = 13, /* target: no motion within the command's limits reaches target (too far for them, or longer than the FMU's horizon; a stop: no stop within DJL_MAX_PLAN_END samples): the planner's reason is logged */
     CMD_ERR_BUFFER_MODE = 14, /* buffer_mode: buffer_mode is not 0 (aborting), 1 (buffered) or 2 (blending) */
-    CMD_ERR_MIN_DURATION = 15, /* min_duration: min_duration is neither 0 nor a finite duration > 0 (s) */
+    CMD_ERR_MIN_DURATION = 15, /* min_duration: min_duration is neither 0 nor a finite duration > 0 (s), or no velocity makes the move last that long within the FMU's horizon */
     CMD_ERR_QUEUE_FULL = 16, /* buffer_mode: a buffered or blending execute while 16 commands already wait */
 } djl_cmd_error;
 

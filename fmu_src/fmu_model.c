@@ -1036,9 +1036,10 @@ static double trial_duration(const model_data *d, const djl_plan *pl, double u, 
 /* min_duration (s): g's velocity limit lowered, if need be, to the fastest (to 1e-9 of it,
  * bisection) with which the move replanned at u lasts at least min_d, a shaper trailing
  * it by t_sh s.  Trials only; g unchanged when no trial plans (the command's own replan
- * then says why) or the move lasts long enough already. */
-static void apply_min_duration(model_instance *m, double t, double u, djl_goal *g, double t_sh,
-                               double min_d)
+ * then says why), the move lasts long enough already, or it has no distance to stretch.
+ * 0, or -1 when no velocity makes it last that long (the command is refused). */
+static int apply_min_duration(model_instance *m, double t, double u, djl_goal *g, double t_sh,
+                              double min_d)
 {
     model_data *d = &m->d;
     djl_replan_info info;
@@ -1046,20 +1047,21 @@ static void apply_min_duration(model_instance *m, double t, double u, djl_goal *
     djl_goal q = *g;
     double lo, hi = g->v_max, dist;
     int i;
-    if (!(min_d > 0.0)) return;
-    if (djl_replan(&d->plan, u, &q, &m->w.trial, &m->w.scratch, &info, &err) != DJL_OK) return;
-    if (trial_duration(d, &m->w.trial, u, t_sh) >= min_d) return;
+    if (!(min_d > 0.0)) return 0;
+    if (djl_replan(&d->plan, u, &q, &m->w.trial, &m->w.scratch, &info, &err) != DJL_OK) return 0;
+    if (trial_duration(d, &m->w.trial, u, t_sh) >= min_d) return 0;
     dist = djl_fabs(m->w.trial.x_target) + djl_fabs(m->w.trial.p.v0) * d->p.Te;
+    if (dist == 0.0) return 0; /* at its target: nothing to stretch */
     lo = dist / min_d < hi ? dist / min_d : 0.5 * hi;
     for (i = 0; i < 64; i++) { /* a velocity slow enough (d / min_d from rest) */
         q.v_max = lo;
-        if (!(lo >= DJL_MIN_MAGNITUDE)) return;
+        if (!(lo >= DJL_MIN_MAGNITUDE)) return -1;
         if (djl_replan(&d->plan, u, &q, &m->w.trial, &m->w.scratch, &info, &err) == DJL_OK &&
             trial_duration(d, &m->w.trial, u, t_sh) >= min_d)
             break;
         lo *= 0.5;
     }
-    if (i == 64) return;
+    if (i == 64) return -1;
     for (i = 0; i < 64 && hi - lo > 1e-9 * hi; i++) {
         double mid = 0.5 * (lo + hi);
         q.v_max = mid;
@@ -1072,6 +1074,7 @@ static void apply_min_duration(model_instance *m, double t, double u, djl_goal *
     model_log(m, ST_OK, DJL_LOG_LOGEVENTS, "t = %.17g s: min_duration = %g s: velocity limit "
               "%.17g m/s instead of %.17g m/s", t, min_d, lo, g->v_max);
     g->v_max = lo;
+    return 0;
 }
 
 /* Whether the move of g replanned at u can end at its target moving at v (signed, m/s)
@@ -1183,10 +1186,13 @@ static model_status plan_command(model_instance *m, double t, double u, const co
     gc.v_max = cv->v_max;
     gc.a_max = cv->a_max;
     gc.d_max = cv->d_max;
-    apply_min_duration(m, t, u, &gc,
-                       cv->switch_shaper ? (cv->sh.n > 0 ? cv->sh.t_max : 0.0)
-                                         : shaper_tail(d) * d->p.Te,
-                       min_d);
+    if (apply_min_duration(m, t, u, &gc,
+                           cv->switch_shaper ? (cv->sh.n > 0 ? cv->sh.t_max : 0.0)
+                                             : shaper_tail(d) * d->p.Te,
+                           min_d) != 0)
+        return command_refused(m, CMD_ERR_MIN_DURATION, "DoStep at t = %.17g s: %s to target = "
+                               "%.17g m: min_duration = %g s: no velocity makes the move last "
+                               "that long within the FMU's horizon", t, why, target, min_d);
     if (d->queue_n > 0) {
         const model_queued *nq = &d->queue[d->queue_first];
         command_values nv;

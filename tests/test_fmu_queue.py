@@ -340,7 +340,8 @@ def test_a_stop_discards_the_queue(g):
                                       ({"buffer_mode": -1}, "BUFFER_MODE"),
                                       ({"min_duration": -1.0}, "MIN_DURATION"),
                                       ({"min_duration": math.nan}, "MIN_DURATION"),
-                                      ({"min_duration": math.inf}, "MIN_DURATION")])
+                                      ({"min_duration": math.inf}, "MIN_DURATION"),
+                                      ({"min_duration": 1e13}, "MIN_DURATION")])
 def test_a_bad_buffer_mode_or_min_duration_is_refused_and_changes_nothing(g, bad, code):
     base_prog = script(cmd(2, 0.5), cmd(10, 0.8, BUFFERED))
     base = Run(g)

@@ -193,7 +193,7 @@ CMD_ERRORS: tuple[tuple[int, str, str, str], ...] = (
     (14, "BUFFER_MODE", "buffer_mode", "buffer_mode is not 0 (aborting), 1 (buffered) or 2 "
      "(blending)"),
     (15, "MIN_DURATION", "min_duration", "min_duration is neither 0 nor a finite duration > 0 "
-     "(s)"),
+     "(s), or no velocity makes the move last that long within the FMU's horizon"),
     (16, "QUEUE_FULL", "buffer_mode",
      f"a buffered or blending execute while {QUEUE_CAPACITY} commands already wait"),
 )
