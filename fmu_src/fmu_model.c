@@ -1196,7 +1196,8 @@ static model_status plan_command(model_instance *m, double t, double u, const co
     if (d->queue_n > 0) {
         const model_queued *nq = &d->queue[d->queue_first];
         command_values nv;
-        if (nq->buffer_mode == BUFFER_MODE_BLENDING && queued_values(m, nq, Nf, &nv) &&
+        if (nq->buffer_mode == BUFFER_MODE_BLENDING && nq->min_duration == 0.0 &&
+            queued_values(m, nq, Nf, &nv) &&
             blend_shaper_ok(m, t, &nv, cv->switch_shaper ? &cv->sp : &d->mv.sp))
             gc.v_end = blend_speed(m, u, &gc, djl_fmin(gc.v_max, nv.v_max), &nv, nq->target);
     }
@@ -1241,6 +1242,7 @@ static void reblend(model_instance *m, double t, double u, const int32_t Nf[4], 
     else
         return; /* a stop, or a parametric move that does not end at rest */
     if (d->plan.v_target != 0.0 || !(u < (double)d->plan.k_end)) return;
+    if (nq->min_duration != 0.0) return; /* its duration counts from rest: buffered */
     if (!queued_values(m, nq, Nf, &nv) || !blend_shaper_ok(m, t, &nv, &d->mv.sp)) return;
     g.kind = DJL_GOAL_TARGET;
     if (d->jerk_source >= JERK_SOURCE_F_MODE)

@@ -291,6 +291,19 @@ def test_blending_with_another_shaper_waits_as_buffered(g):
     assert any("waits as buffered" in m.message for m in g.log)
 
 
+def test_blending_with_min_duration_waits_as_buffered(g):
+    """B blending with a min_duration of its own: its duration counts from rest, so the
+    axis rests at A's target, then B lasts at least min_duration."""
+    r = _blend(g, 0.4, 0.6, {}, {"min_duration": 1.0})
+    x, v = r.col("x"), r.col("v")
+    moving = np.abs(v) > 0
+    ends = np.flatnonzero(moving[:-1] & ~moving[1:]) + 1
+    starts = np.flatnonzero(moving[1:] & ~moving[:-1]) + 1
+    assert len(ends) == 2 and x[ends[0]] == pytest.approx(0.4, abs=1e-12)
+    assert (ends[1] - starts[1] + 2) * TE >= 1.0 - 1e-9
+    assert x[-1] == pytest.approx(0.6, abs=1e-12)
+
+
 def test_a_chain_of_blends_lands_on_the_last_target(g):
     """Four moves blended one after another (given at once): the axis passes 0.2, 0.5 and
     0.9 m without stopping, at the lower v_max of each pair, and rests on 1.0 m."""
