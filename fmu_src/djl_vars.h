@@ -4,7 +4,7 @@
 #define DJL_VARS_H
 
 #define DJL_MODEL_IDENTIFIER "JerkLimitedTrajectory"
-#define DJL_INSTANTIATION_TOKEN "{379ed864-4832-5c05-a838-36343285e3f8}"
+#define DJL_INSTANTIATION_TOKEN "{7953f066-f301-5b2e-be5a-cf92a4920a5f}"
 #define DJL_VARS_MAX_SEGMENTS 32
 
 /* value references (arrays: first element; element i at base + i) */

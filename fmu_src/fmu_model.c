@@ -625,13 +625,25 @@ static void replanned(model_instance *m, double t, const djl_goal *g,
     d->cursor = 0;
     memset(d->shaper_cursor, 0, sizeof d->shaper_cursor);
     if (d->replans < INT64_MAX) d->replans++; /* a restored state may hold any count */
-    model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
-              "t = %.17g s: %s: replanned from sample %lld (%s; stage ending at sample %lld, "
-              "settled velocity %.17g m/s), jerk times %d/%d/%d/%d samples, at rest %.17g s "
-              "after sample %lld", t, why, (long long)info->b,
-              replan_how[info->how >= 1 && info->how <= 3 ? info->how : 0],
-              (long long)info->end_at, info->v_settled, (int)g->N[0], (int)g->N[1],
-              (int)g->N[2], (int)g->N[3], djl_motion_time(&d->plan), (long long)info->origin);
+    if (d->plan.v_target != 0.0) /* a move blending into the next: it ends moving */
+        model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
+                  "t = %.17g s: %s: replanned from sample %lld (%s; stage ending at sample "
+                  "%lld, settled velocity %.17g m/s), jerk times %d/%d/%d/%d samples, passing "
+                  "its target at %.17g m/s %.17g s after sample %lld", t, why,
+                  (long long)info->b,
+                  replan_how[info->how >= 1 && info->how <= 3 ? info->how : 0],
+                  (long long)info->end_at, info->v_settled, (int)g->N[0], (int)g->N[1],
+                  (int)g->N[2], (int)g->N[3], d->plan.v_target, djl_motion_time(&d->plan),
+                  (long long)info->origin);
+    else
+        model_log(m, ST_OK, DJL_LOG_LOGEVENTS,
+                  "t = %.17g s: %s: replanned from sample %lld (%s; stage ending at sample "
+                  "%lld, settled velocity %.17g m/s), jerk times %d/%d/%d/%d samples, at rest "
+                  "%.17g s after sample %lld", t, why, (long long)info->b,
+                  replan_how[info->how >= 1 && info->how <= 3 ? info->how : 0],
+                  (long long)info->end_at, info->v_settled, (int)g->N[0], (int)g->N[1],
+                  (int)g->N[2], (int)g->N[3], djl_motion_time(&d->plan),
+                  (long long)info->origin);
     if (info->clipped == 1)
         model_log(m, ST_WARNING, DJL_LOG_LOGSTATUSWARNING,
                   "t = %.17g s: %s: the jerk time of the stage that ends the current one was "

@@ -351,7 +351,8 @@ VARIABLES: tuple[Variable, ...] = (
        "any value is accepted when set, a command to one that is not finite or beyond 1e300 m "
        "is refused at its edge (cmd_error)", "m"),
     _i("execute", 51, "Boolean", False, "Rising edge: move from the current state (any velocity "
-       "and acceleration) to target, ending at rest; a move in progress is replaced"),
+       "and acceleration) to target, ending at rest; a move in progress is replaced (with "
+       "buffer_mode = 1 or 2 the command waits its turn instead)"),
     _i("stop", 52, "Boolean", False, "Rising edge: come to rest with d_max and the stages' jerk "
        "times (wins over execute at the same step); the axis then waits for execute"),
     _i("f_mode", 53, "Real", 10.0, "Frequency of the vibration mode, used when jerk_source = 2 "
