@@ -27,7 +27,7 @@ from test_generator_invariants import multi_moves, single_moves
 
 from harness import _engine
 from harness._resources import fmu_src_dir
-from harness.fmu.codegen import CORE_SOURCES
+from harness.fmu.codegen import CORE_SOURCES, FMU_SOURCES
 from harness.fmu.runner import FMUError, GeneratorFMU
 from harness.plant import step_mode_jerk
 from harness.scenario import load_scenario
@@ -37,7 +37,8 @@ from harness.simulation.master import cosimulate, map_error_residuals
 from harness.simulation.session import Session
 from harness.tuning.tune import tune_profile
 
-CORE = [str(fmu_src_dir() / f) for f in CORE_SOURCES]
+# the core and the FMU model (run_program)
+CORE = [str(fmu_src_dir() / f) for f in (*CORE_SOURCES, *FMU_SOURCES)]
 
 REAL = ("x", "v", "a", "j", "x_AL", "v_AL", "a_AL")
 

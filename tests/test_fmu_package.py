@@ -82,7 +82,9 @@ def test_model_description_declares_capabilities(fmus, version):
                      # issue 34: 0 = the parameter's value
                      "CmdProfile": [("parameter", 0), ("AL", 1), ("JL", 2), ("DJL", 3)],
                      "CmdShaper": [("parameter", 0), ("ZV", 1), ("ZVD", 2), ("EI", 3),
-                                   ("custom", 4), ("none", 5)]}
+                                   ("custom", 4), ("none", 5)],
+                     # issue 34, items 2 and 4
+                     "BufferMode": [("aborting", 0), ("buffered", 1), ("blending", 2)]}
     assert by["profile"].declaredType.name == "Profile"
     assert by["cmd_profile"].declaredType.name == "CmdProfile"
     display = {u.name: {d.name: d.factor for d in u.displayUnits} for u in md.unitDefinitions}
@@ -118,13 +120,20 @@ def test_model_description_declares_capabilities(fmus, version):
     # issue #12: the inputs, with their declared start values
     inputs = {v.name: v for v in md.modelVariables if v.causality == "input"}
     assert set(inputs) == {"target", "execute", "stop", "f_mode"} | {
-        n for n in inputs if n.startswith("cmd_")}  # issue 34's per-command values
+        n for n in inputs if n.startswith("cmd_")} | {  # issue 34's per-command values
+        "buffer_mode", "min_duration"} | (  # issue 34's buffer modes and synchronisation
+        {"buffer_mode_code"} if version == 2 else set())
     assert {n.split("[")[0] for n in inputs if n.startswith("cmd_")} == {
         "cmd_v_max", "cmd_a_max", "cmd_d_max", "cmd_profile", "cmd_T_F", "cmd_shaper",
         "cmd_shaper_n", "cmd_shaper_amplitude", "cmd_shaper_delay"} | (
         {"cmd_profile_code", "cmd_shaper_code"} if version == 2 else set())
     assert inputs["execute"].type == inputs["stop"].type == "Boolean"
     assert inputs["target"].unit == "m" and inputs["f_mode"].unit == "Hz"
+    assert inputs["min_duration"].unit == "s"
+    assert inputs["buffer_mode"].declaredType.name == "BufferMode"
+    for name, typ in (("active", "Boolean"), ("command_aborted", "Boolean"),
+                      ("queue_length", "Integer"), ("time_to_rest", "Real")):
+        assert by[name].causality == "output" and by[name].type in (typ, "Int32", "Float64")
     assert by["jerk_source"].declaredType.name == "JerkSource"
     assert by["busy"].type == "Boolean" and by["stage"].causality == "output"
     # ModelStructure: every output, without direct feedthrough (no states; an input acts
