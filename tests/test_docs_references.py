@@ -21,7 +21,11 @@ Skipped, and only these:
   ``[harness.md](harness.md)``, not a module.
 
 ``docs/engine.md``'s Python examples are also run (they once imported a module that no
-longer existed).
+longer existed), and every relative link of ``README.md`` and ``docs/*.md`` is checked to
+reach an existing file and, for ``#anchor``, a heading of that page (GitHub's anchors: the
+heading lowercased, its punctuation but ``-`` and ``_`` dropped, spaces made ``-``, a
+repeated heading numbered ``-1``, ``-2`` ...): the README's sections moved to docs/ and the
+fuzzing log to docs/fuzzing.md (issue 36) with their links kept working.
 """
 
 from __future__ import annotations
@@ -155,3 +159,57 @@ def test_engine_doc_examples_run(block, tmp_path, monkeypatch):
     else:
         run = namespace["run"]
         assert run["x"][-1] == pytest.approx(0.6, abs=1e-12) and run["queue_length"].max() == 1
+
+
+def _slug(heading: str) -> str:
+    text = re.sub(r"[^\w\- ]", "", heading.strip().lower())
+    return text.replace(" ", "-")
+
+
+def _outside_code(path: Path) -> list[tuple[int, str]]:
+    lines, fence = [], False
+    for i, line in enumerate(path.read_text().splitlines(), 1):
+        if line.startswith("```"):
+            fence = not fence
+        elif not fence:
+            lines.append((i, line))
+    return lines
+
+
+@cache
+def _anchors(path: Path) -> frozenset[str]:
+    seen: dict[str, int] = {}
+    out = set()
+    for _, line in _outside_code(path):
+        m = re.match(r"#{1,6} (.*)", line)
+        if m:
+            s = _slug(m.group(1))
+            n = seen.get(s, 0)
+            out.add(s if n == 0 else f"{s}-{n}")
+            seen[s] = n + 1
+    return frozenset(out)
+
+
+def test_slugs_are_githubs():
+    assert _slug("Replayed tables (profile = 4)") == "replayed-tables-profile--4"
+    assert _slug("Two engines (`--engine`)") == "two-engines---engine"
+    assert _slug("Fuzz harnesses (`tests/fuzz/`)") == "fuzz-harnesses-testsfuzz"
+    assert _slug("DJL tuned to win — and what it costs") == "djl-tuned-to-win--and-what-it-costs"
+
+
+def test_every_relative_link_of_the_docs_resolves():
+    bad = []
+    for page in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]:
+        for line_no, line in _outside_code(page):
+            for m in re.finditer(r"\]\(([^)\s]+)\)", line):
+                target = m.group(1)
+                if re.match(r"[a-z][a-z0-9+.-]*:", target):
+                    continue  # https:, mailto: ...
+                file, _, anchor = target.partition("#")
+                path = (page.parent / file).resolve() if file else page
+                where = f"{page.relative_to(ROOT)}:{line_no}: {target}"
+                if not path.exists():
+                    bad.append(f"{where} (no such file)")
+                elif anchor and path.suffix == ".md" and anchor not in _anchors(path):
+                    bad.append(f"{where} (no such heading)")
+    assert not bad, "links that lead nowhere:\n" + "\n".join(bad)
