@@ -12,7 +12,7 @@
  *    calls too); the FMU's parameters are read by name through the table the
  *    FMU uses (djl_vars.h, generated from harness/fmu/spec.py);
  *  - synchronise the Z move (bisection on v_max, the same arithmetic as
- *    harness.planner.sync_z_velocity);
+ *    harness.simulation.fmu_axis.FMUAxis.sync_velocity);
  *  - step the scheduled plant: every mode advanced exactly over each step for
  *    the input a_k + j_k tau (constant jerk over the step), with its frequency
  *    given per step (the same arithmetic as harness.plant.step_mode_jerk).
@@ -1084,7 +1084,7 @@ static djl_status time_at(sync_ctx *c, double v, double *T, djl_error *err)
 }
 
 /* sync_velocity(params, target_time, v_cap, start_time=0) -> (v_max, motion_time, synced)
- * The same bisection as harness.planner.sync_z_velocity. */
+ * The same bisection as harness.simulation.fmu_axis.FMUAxis.sync_velocity. */
 static PyObject *engine_sync_velocity(PyObject *self, PyObject *args, PyObject *kwds)
 {
     static char *kwlist[] = {"params", "target_time", "v_cap", "start_time", NULL};

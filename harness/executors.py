@@ -8,7 +8,9 @@
 * otherwise a :class:`~concurrent.futures.ProcessPoolExecutor` with ``workers``
   processes (default: every core, :func:`os.cpu_count`);
 * ``scheduler="tcp://host:8786"``: the workers of an existing Dask cluster,
-  through ``distributed.Client(address).get_executor()``.
+  through ``distributed.Client(address).get_executor()``.  dask.distributed is
+  the optional extra ``[cluster]`` (``pip install 'djl-fmu[cluster]'``), imported
+  only here, when a scheduler is given (:func:`require_distributed`).
 
 The callers (:func:`harness.workspace.run_map`) submit top-level functions and
 collect :class:`concurrent.futures.Future` objects, so one code path serves
@@ -45,17 +47,22 @@ from typing import Any
 from .errors import HarnessError
 
 __all__ = [
+    "CLUSTER_INSTALL",
     "CONNECT_TIMEOUT",
     "ExecutorError",
     "SerialExecutor",
     "describe_executor",
     "executor_workers",
     "make_executor",
+    "require_distributed",
     "run_batches",
 ]
 
 CONNECT_TIMEOUT = 10.0
 """Seconds allowed to reach a Dask scheduler and to find a worker on it."""
+
+CLUSTER_INSTALL = "pip install 'djl-fmu[cluster]'"
+"""How to install dask.distributed, the optional extra that a Dask cluster needs."""
 
 
 class ExecutorError(HarnessError, ValueError):
@@ -286,6 +293,27 @@ def make_executor(workers: int | None = None, scheduler: str | None = None, *,
         client.close()
 
 
+def require_distributed() -> None:
+    """Import dask.distributed, or say how to install it (the extra ``[cluster]``).
+
+    Only a Dask cluster (``scheduler=...``, ``--scheduler``) needs it; the local cores
+    do not.
+
+    Raises
+    ------
+    ExecutorError
+        When it cannot be imported: the message names :data:`CLUSTER_INSTALL`.
+    """
+    try:
+        import distributed  # noqa: F401  (deferred: dask.distributed is heavy to import)
+    except ImportError as e:
+        raise ExecutorError(
+            f"running on a Dask cluster (a scheduler address) needs dask.distributed, which "
+            f"is not installed ({e}): install it with {CLUSTER_INSTALL} (from a source "
+            f"checkout: pip install '.[cluster]'), or run on this machine's cores (no "
+            f"scheduler)") from None
+
+
 def connect(address: str, *, timeout: float | None = None) -> Any:
     """Connect to a Dask scheduler that has at least one worker.
 
@@ -304,16 +332,14 @@ def connect(address: str, *, timeout: float | None = None) -> Any:
     Raises
     ------
     ExecutorError
-        If the scheduler cannot be reached, or has no worker, within ``timeout``.
+        If dask.distributed is not installed (the message says how to install it), or
+        the scheduler cannot be reached, or has no worker, within ``timeout``.
     """
     timeout = CONNECT_TIMEOUT if timeout is None else float(timeout)
     if not isinstance(address, str) or not address.strip():
         raise ExecutorError(f"bad Dask scheduler address {address!r} (e.g. tcp://host:8786)")
-    try:
-        from distributed import Client  # deferred: dask.distributed is heavy to import
-    except ImportError as e:  # pragma: no cover (a dependency of the package)
-        raise ExecutorError(f"cannot use the Dask scheduler {address}: dask.distributed is "
-                            f"not installed ({e})") from None
+    require_distributed()
+    from distributed import Client  # deferred: dask.distributed is heavy to import
     what = _probe(address, timeout)
     if what != "Scheduler":
         raise ExecutorError(f"{address} is a Dask {what}, not a scheduler: give the address "

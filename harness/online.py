@@ -26,7 +26,7 @@ from its ``f_mode`` input:
 (profile DJL), the master setting ``f_mode`` at every communication point t_k
 to the tuned mode's frequency at the Z generator's current position, f(z(t_k))
 from the mode map, and compares it, through the same plant and metrics, with
-the offline-tuned DJL of the scenario (:meth:`harness.cosim.Session.tune`, the
+the offline-tuned DJL of the scenario (:func:`harness.tuning.tune.tune_profile`, the
 paper's rule unless the scenario asks for another).  Both runs share the same
 Z move: the one synchronised with the offline DJL move (the online move's
 duration is not known before it runs).  :func:`format_online` puts several
@@ -556,7 +556,7 @@ class OnlineResult:
         The run with ``jerk_source`` 2 or 3 (:attr:`jerk_source`), ``f_mode``
         set from z at every step.
     offline : CoSimResult
-        The offline-tuned DJL (:meth:`harness.cosim.Session.tune`).
+        The offline-tuned DJL (:func:`harness.tuning.tune.tune_profile`).
     offline_tuning : TuningResult or None
         How the offline jerk times were found (None when the scenario imposes them).
     f_mode : ndarray

@@ -532,7 +532,7 @@ class ScheduledMode:
         Label.
     f_of_z_array : callable, optional
         The same law on an array of positions (vectorised, same values); used
-        by the fast engine (:mod:`harness.engine`).  Without it the scalar law
+        by the fast engine (:mod:`harness.simulation.fast_axis`).  Without it the scalar law
         is applied element by element.
     """
 

@@ -241,7 +241,7 @@ def robustness(sc: Scenario, session: Session,
         Generator instances.
     profiles : mapping
         Profile name → its jerk times tuned on the nominal map: a
-        :class:`~harness.tuning.TuningResult`, four jerk times (s), one JL jerk
+        :class:`~harness.tuning.rule.TuningResult`, four jerk times (s), one JL jerk
         time (s), or None (AL only).
     errors : array_like, optional
         Map errors e (default: the scenario's uncertainty's curves, ±2·map_scale in

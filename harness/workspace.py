@@ -230,7 +230,7 @@ def run_workspace_map(scenario: Scenario | str | Path, *, engine: str = "fast",
         :class:`~harness.scenario.Scenario`, a TOML file or an embedded name
         (``X``, ``Y``).
     engine : {"fast", "fmu"}
-        Evaluation engine (see :class:`harness.cosim.Session`).
+        Evaluation engine (see :class:`harness.simulation.session.Session`).
     workers : int, optional
         Local worker processes (default: every core); 1 runs in this process.
     scheduler : str, optional

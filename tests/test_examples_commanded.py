@@ -1,4 +1,8 @@
-"""The commanded-FMU examples (issue #12) run, fast and headless; the README's fmpy snippet."""
+"""The commanded-FMU examples (issue #12) run, fast and headless; the fmpy snippets of the docs.
+
+The commanded snippet is docs/fmu.md's ("Commanded while it runs"), the parametric one the
+README's ("From fmpy, in ten lines"); both run here as they are written there.
+"""
 
 from __future__ import annotations
 
@@ -80,50 +84,51 @@ def test_online_fmode_example(tmp_path, capsys):
     assert (tmp_path / "djl-fmu-out" / "online_fmode.png").stat().st_size > 10_000
 
 
+ROOT = EXAMPLES.parent
+
+
+def _python_block(doc: str, after: str) -> str:
+    """The first ```python block of ``doc`` (a path under the repository) after ``after``."""
+    text = (ROOT / doc).read_text()
+    m = re.search(r"```python\n(.*?)```", text[text.index(after):], re.S)
+    assert m, f"{doc}: no python block after {after!r}"
+    return m.group(1)
+
+
 @pytest.mark.parametrize("v", [2, 3], ids=["fmi2", "fmi3"])
 def test_readme_fmpy_snippet(tmp_path, fmus, v, capsys):
-    """The code given for the README (commands as an fmpy input table), on both FMUs."""
+    """The code of docs/fmu.md, "Commanded while it runs" (commands as an fmpy input table; in
+    the README until issue 36), run as written there, on both FMUs."""
     import shutil
 
     shutil.copy(fmus[v], tmp_path / "JerkLimitedTrajectory.fmu")
+    code = _python_block("docs/fmu.md", "From fmpy, the commands as a signal table")
+    assert "input=signals" in code and 'print(res["time"][ends], res["x"][ends])' in code
 
     def snippet():
-        # --- as in the README ---------------------------------------------------------
-        import numpy as np
-        from fmpy import simulate_fmu
-
-        # the commands, as a table: go to 0.3 m at 0.1 s; at 0.5 s, still moving, to 0.1 m
-        # instead; at 1.2 s to 0.4 m, stopped on the way at 1.4 s (a command is a rising
-        # edge: False in between)
-        signals = np.array([
-            # time  target  execute  stop    f_mode (Hz; read only with jerk_source 2, 3)
-            (0.0,   0.0,    False,   False,  10.0),
-            (0.1,   0.3,    True,    False,  10.0),
-            (0.2,   0.3,    False,   False,  10.0),
-            (0.5,   0.1,    True,    False,  10.0),
-            (0.6,   0.1,    False,   False,  10.0),
-            (1.2,   0.4,    True,    False,  10.0),
-            (1.3,   0.4,    False,   False,  10.0),
-            (1.4,   0.4,    False,   True,   10.0),
-        ], dtype=[("time", float), ("target", float), ("execute", bool), ("stop", bool),
-           ("f_mode", float)])
-
-        res = simulate_fmu("JerkLimitedTrajectory.fmu", stop_time=2.0, output_interval=1e-3,
-                           start_values={"distance": 0.0, "v_max": 0.5, "a_max": 4.0,
-                                         "d_max": 4.0},
-                           input=signals, output=["x", "v", "a", "busy", "stage"])
-        ends = np.flatnonzero(res["busy"][:-1] & ~res["busy"][1:]) + 1  # where each move rests
-        print(res["time"][ends], res["x"][ends])  # [1.062 1.586] [0.1 0.197...]
-        # ---------------------------------------------------------------------------------
-        return res, ends
+        namespace: dict = {}
+        exec(compile(code, "docs/fmu.md (commanded fmpy snippet)", "exec"), namespace)
+        return namespace["res"], namespace["ends"]
 
     res, ends = _in(tmp_path, snippet)
     out = capsys.readouterr().out
-    # runs without warnings but fmpy's for the inputs the table leaves out: the per-command
-    # values (issue 34), at their start value 0, the parameters'
+    # runs without warnings but fmpy's, one for each input the table leaves out: the
+    # per-command values, buffer_mode and min_duration (issue 34), at their start values (the
+    # parameters', aborting, none); in FMI 2 each element of an array (FMI 3: the array) and
+    # the Integer aliases of the Enumeration inputs
+    from harness.fmu import spec
+
     warned = [ln for ln in out.splitlines() if "Warning" in ln or "missing input" in ln]
-    assert warned and all(re.fullmatch(r'Warning: missing input for variable "cmd_[^"]+"', ln)
-                          for ln in warned), out
+    names = [re.fullmatch(r'Warning: missing input for variable "([^"]+)"', ln) for ln in warned]
+    assert warned and all(names), out
+    left_out = [w for w in spec.VARIABLES if w.causality == "input"
+                and w.name not in ("target", "execute", "stop", "f_mode")]
+    expected = {w.name if w.size == 1 or v == 3 else f"{w.name}[{i}]" for w in left_out
+                for i in range(1, w.size + 1)}
+    if v == 2:
+        expected |= {w.name + spec.FMI2_ENUM_ALIAS_SUFFIX for w in left_out
+                     if w.type == "Enumeration"}
+    assert sorted(m.group(1) for m in names) == sorted(expected), out
     # what the snippet prints (a command read at t acts from the next sample, t + 1 ms)
     np.testing.assert_allclose(res["time"][ends], [1.062, 1.586], rtol=0, atol=1e-9)
     assert res["x"][ends[1]] == pytest.approx(0.197214, abs=1e-6)
@@ -141,6 +146,25 @@ def test_readme_fmpy_snippet(tmp_path, fmus, v, capsys):
     k14 = int(np.argmin(np.abs(t - 1.4)))
     assert x[k14] < x[ends[1]] < 0.4 and np.all(x[ends[1]:] == x[ends[1]])
     assert np.all(vel[ends[1]:] == 0.0) and not res["busy"][-1]
+
+
+@pytest.mark.parametrize("v", [2, 3], ids=["fmi2", "fmi3"])
+def test_readme_parametric_fmpy_example(tmp_path, fmus, v, capsys):
+    """The README's "From fmpy, in ten lines", run as written there, on both FMUs: the DJL
+    move ends on 0.4 m, its motion at 1.13 s, as its comment says."""
+    import shutil
+
+    shutil.copy(fmus[v], tmp_path / "JerkLimitedTrajectory.fmu")
+    code = _python_block("README.md", "## From fmpy, in ten lines")
+    assert len(code.strip().splitlines()) <= 12
+    namespace: dict = {}
+    _in(tmp_path, lambda: exec(compile(code, "README.md (fmpy example)", "exec"), namespace))
+    res = namespace["res"]
+    assert res["x"][-1] == pytest.approx(0.4, abs=1e-12)
+    assert res["time"][res["done"].argmax()] == pytest.approx(1.13, abs=1e-9)
+    assert np.all(res["done"][res["done"].argmax():]) and res["v"][-1] == 0.0
+    printed = capsys.readouterr().out.split()
+    assert float(printed[-2]) == pytest.approx(0.4) and float(printed[-1]) == pytest.approx(1.13)
 
 
 def test_motion_program_example(tmp_path, capsys, fmus):

@@ -4,7 +4,7 @@ The harnesses (FMI 2 / FMI 3 call sequences, FMU state deserialisation, the plan
 parameter space) check their invariants themselves: finite outputs, limits, landing when
 done, states the FMU saved accepted back.  Here each is built with gcc and
 tests/fuzz/replay.c, under AddressSanitizer + UBSan where gcc has them, and run over
-its committed, minimised corpus (the inputs of the campaign in docs/generator.md and the
+its committed, minimised corpus (the inputs of the campaign in docs/fuzzing.md and the
 reproducers of issue 21).
 """
 
@@ -91,8 +91,8 @@ def test_replay_driver_fails_on_a_broken_invariant(tmp_path: Path) -> None:
 
 
 def test_open_findings_still_break_the_fmi_harness(tmp_path: Path) -> None:
-    """tests/fuzz/open/ holds FMI inputs whose finding is not fixed yet (docs/generator.md,
-    "Open finding"): each still breaks an invariant, and FUZZ_VERBOSE traces the calls it
+    """tests/fuzz/open/ holds FMI inputs whose finding is not fixed yet (docs/fuzzing.md,
+    "The campaign"): each still breaks an invariant, and FUZZ_VERBOSE traces the calls it
     decodes to.  When this fails because an input passes, the finding is fixed: move the
     input into corpus/fmi with its regression test."""
     if shutil.which("gcc") is None:

@@ -301,7 +301,7 @@ def test_parse_tuning():
     for bad in ("fastest", "jl=robust"):
         with pytest.raises(CommandError, match="tuning method"):
             parse_tuning(bad)
-    # an unknown key is named as such (harness.tuning.methods.parse_tuning)
+    # an unknown key is named as such (harness.tuning_options.parse_tuning)
     with pytest.raises(CommandError, match="unknown profile 'zz'"):
         parse_tuning("zz=optimal")
 

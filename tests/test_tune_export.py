@@ -186,7 +186,7 @@ def test_single_move_against_independent_recomputation(x_robust, session):
 
 
 def test_paper_method_gives_the_documented_table1_numbers():
-    # README / docs/harness.md, scenario X: DJL 118/120/142/147 ms, residual 0.098 mm,
+    # docs/cli.md / docs/harness.md, scenario X: DJL 118/120/142/147 ms, residual 0.098 mm,
     # worst over +/-10 % 0.490 mm; JL 152 ms, 0.171 mm, worst 0.326 mm
     r = tune_table("X", djl_method="paper", single=True).rows[0]
     assert tuple(r[f"djl_N_F{i}"] for i in range(1, 5)) == (118, 120, 142, 147)

@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import CommandError
+from ..executors import ExecutorError, require_distributed
 from ..files import OutputSet, Terminated, sigterm_raises
 from ..scenario import ScenarioError, load_scenario
 from ..tuning_options import DJL_METHODS, JL_METHODS, variants_of
@@ -232,7 +233,8 @@ def add_parallel_options(p: argparse.ArgumentParser, what: str = "moves",
                         "in this process)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="run on a Dask cluster: the scheduler's address, e.g. "
-                        "tcp://10.0.0.5:8786")
+                        "tcp://10.0.0.5:8786 (needs the [cluster] extra: pip install "
+                        "'djl-fmu[cluster]')")
     if max_moves is not None:
         p.add_argument("--max-moves", type=int, default=None, metavar="N", help=max_moves)
 
@@ -421,6 +423,9 @@ def check_parallel_options(workers: int | None, scheduler: str | None,
                            max_moves: int | None) -> None:
     """Refuse bad ``--workers``, ``--max-moves``, or both ``--workers`` and ``--scheduler``.
 
+    ``--scheduler`` without dask.distributed (the optional extra ``[cluster]``) is refused
+    too, the message saying how to install it.
+
     Raises
     ------
     CommandError
@@ -433,6 +438,11 @@ def check_parallel_options(workers: int | None, scheduler: str | None,
     if workers is not None and scheduler is not None:
         raise CommandError(2, "give --workers or --scheduler, not both (on a Dask cluster "
                               "the cluster's workers run the moves)")
+    if scheduler is not None:  # dask.distributed is the optional extra [cluster]
+        try:
+            require_distributed()
+        except ExecutorError as e:
+            raise CommandError(2, f"--scheduler {scheduler}: {e}") from None
 
 
 def check_stems(scenarios: Sequence[Any]) -> None:

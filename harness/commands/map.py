@@ -58,11 +58,12 @@ has succeeded:
   <name>-map-*.png      residual of each profile as % of AL, settling time DJL vs JL
   summary.txt           moves, time per move, workers, median and max residuals
 
-Running on a Dask cluster:
+Running on a Dask cluster (dask.distributed: pip install 'djl-fmu[cluster]', or
+pip install '.[cluster]' from a checkout, here and on every worker):
   dask scheduler                               # prints its address, tcp://HOST:8786
   dask worker tcp://HOST:8786 --nworkers 4 --nthreads 1   # on every machine (4 cores)
   djl-fmu map X --scheduler tcp://HOST:8786
-Every worker needs this package installed (pip install . from the same checkout);
+Every worker needs this package installed (pip install '.[cluster]' from the same checkout);
 with --engine fmu and a scenario that names its own FMU file, the file must
 exist at the same path on the workers.
 """

@@ -508,11 +508,11 @@ def fmi3_build_description() -> str:
     return "\n".join(x) + "\n"
 
 
-# --------------------------------------------------------------------------- README
+# ------------------------------------------------------------- docs/variables.md
 
 
 def readme_table() -> str:
-    """Markdown table of the FMU variables (pasted in README.md; a test checks it)."""
+    """Markdown table of the FMU variables (pasted in docs/variables.md; a test checks it)."""
     rows = ["| name | causality / variability | type (FMI 2 / FMI 3) | unit (display) | start | "
             "range | meaning |",
             "|---|---|---|---|---|---|---|"]

@@ -3,7 +3,7 @@
 For one scenario (:mod:`harness.scenario`), :func:`compare_scenario`
 
 1. runs AL, JL and DJL exactly as ``djl-fmu simulate`` does
-   (:func:`harness.cosim.run_case`: JL tuned to the modal period at the end of
+   (:func:`harness.evaluation.run_case`: JL tuned to the modal period at the end of
    the motion, DJL stage by stage), which also fixes the settling band (the
    scenario's ``settle_band``, by default 1 % of AL's residual, one band for
    every method);
@@ -34,10 +34,10 @@ For one scenario (:mod:`harness.scenario`), :func:`compare_scenario`
 3. feeds every peer's reference to the same plant (:class:`harness.plant.ScheduledPlant`)
    with the same Z axis (a generator FMU instance, its move synchronised with
    the peer's motion time, as the harness does for each profile), stepping like
-   :func:`harness.cosim.cosimulate` (:func:`cosimulate_reference`: the exact
+   :func:`harness.simulation.master.cosimulate` (:func:`cosimulate_reference`: the exact
    acceleration is fed piece by piece, split at the method's own switching
    instants, so an input shaper's off-sample delays are not smeared), and
-   measures it with :func:`harness.cosim.profile_metrics` in the same band;
+   measures it with :func:`harness.evaluation.profile_metrics` in the same band;
 4. measures every method against a map error on the time-varying plant: the
    whole f(z) map scaled by 1 + e, e in ±2·m (m the map scale of the
    scenario's uncertainty, 0.1 by default: ±20 %), each reference planned once
@@ -192,9 +192,9 @@ class MethodOutcome:
     ----------
     name : str
     tuned_to : str
-    metrics : harness.cosim.ProfileMetrics
+    metrics : harness.evaluation.ProfileMetrics
         Residual, free amplitude, motion time, rise and settling time (same band for all).
-    run : harness.cosim.CoSimResult
+    run : harness.simulation.master.CoSimResult
     peaks : dict
         Largest |v|, |a|, |j| of the reference.
     params : dict
@@ -701,7 +701,7 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
     ----------
     scenario : Scenario, str or Path
         A scenario (or an embedded name, or a TOML file) without ``[sweep]``.
-    session : harness.cosim.Session, optional
+    session : harness.simulation.session.Session, optional
         Generator instances to reuse.
     peers : sequence of str
         Subset of :data:`ALL_PEERS` (default :data:`PEERS`).
@@ -710,7 +710,7 @@ def compare_scenario(scenario: Any, *, session: Any = None, peers: Sequence[str]
         (default -40 % .. +40 %).
     engine : {"fmu", "fast"}
         Engine of the session made when ``session`` is not given (see
-        :class:`harness.cosim.Session`).
+        :class:`harness.simulation.session.Session`).
     map_errors : array_like, "uncertainty" or None
         Map errors e of the time-varying robustness (the plant's whole f(z)
         scaled by 1 + e; default ``"uncertainty"``: ±2·map_scale of the

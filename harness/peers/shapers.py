@@ -118,7 +118,7 @@ def base_motion(sc: Any, profile: str, T_F: float | None = None, distance: float
         JL jerk time (s), all four stages.
     distance : float, optional
         Signed distance (m); default the scenario's.
-    session : harness.cosim.Session, optional
+    session : harness.simulation.session.Session, optional
         Plan with its excited axis (FMU or fast engine); otherwise through
         :func:`harness.fmu.runner.generate` with ``fmu`` / ``fmi_version``.
     fmu, fmi_version

@@ -312,7 +312,7 @@ def z_of_t(zs: Any, t: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-    zs : harness.planner.MoveSamples
+    zs : harness.simulation.axis.MoveSamples
         The Z move sampled at every generator sample (``t, x, v, a, j``).
     t : ndarray
         Times (s); after the last sample the position is extrapolated with the
@@ -372,7 +372,7 @@ def design_for_scenario(sc: Any, session: Any, base: Callable[[float], Piecewise
     Parameters
     ----------
     sc : harness.scenario.Scenario
-    session : harness.cosim.Session
+    session : harness.simulation.session.Session
         Its Z axis plans the synchronised Z move.
     base : callable
         ``base(distance) -> PiecewiseJerk``: the unshaped reference (e.g. the

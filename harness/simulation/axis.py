@@ -9,7 +9,7 @@ Two axes implement it, with the same generator core and the same values:
   into the extension module ``harness._engine``, every point of a move in one
   call (about a hundred times faster).
 
-A third, :class:`harness.simulation.master.MotionAxis`, wraps a precomputed
+A third, :class:`harness.peers.motion_axis.MotionAxis`, wraps a precomputed
 motion (the peers' references) for the same master.
 
 The module also holds what every axis shares: :class:`MoveSamples` (a move at

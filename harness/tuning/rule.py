@@ -188,7 +188,7 @@ def tune_djl(plan: PlanFunction, period_of_z: Callable[[float], float], Te: floa
     ----------
     plan : PlanFunction
         Plans the move for given jerk times; the samples must show the FMU's
-        ``a_AL`` (stage starts, see :func:`harness.planner.stage_starts`).
+        ``a_AL`` (stage starts, see :func:`harness.simulation.axis.stage_starts`).
     period_of_z : callable
         Modal period (s) of the tuned mode at z (m).
     Te : float

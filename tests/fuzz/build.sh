@@ -3,7 +3,7 @@
 # (clang; Debian: apt-get install clang libclang-rt-14-dev), into $OUT (default
 # /tmp/djl-fuzz): fuzz_fmi, fuzz_state, fuzz_plan.  The fuzzers are tools run on
 # demand, not part of the suite (tests/test_fuzz_corpus.py replays the corpus with
-# gcc).  Run one at a time, e.g. (docs/generator.md, "Fuzzing"):
+# gcc).  Run one at a time, e.g. (docs/fuzzing.md):
 #
 #   tests/fuzz/build.sh && nice -n 15 /tmp/djl-fuzz/fuzz_fmi -max_total_time=1800 \
 #       /tmp/djl-fuzz/corpus_fmi tests/fuzz/corpus/fmi
@@ -13,7 +13,7 @@
 # tests of the IEEE 754 encoding, inlined everywhere: their callbacks took 48 % of
 # fuzz_plan's time and 20 % of fuzz_fmi's (perf) and guided nothing (the harnesses decode
 # choices by table index).  Measured from an
-# empty corpus, same seed, 120-150 s each, the two builds side by side (docs/generator.md,
+# empty corpus, same seed, 120-150 s each, the two builds side by side (docs/fuzzing.md,
 # "Fuzz harnesses"): without the tracing 1.5-3.6x the inputs/s and more edges reached.
 # The state checksum is built without ASan/UBSan (tests/fuzz/sanitize_ignore.txt says why).
 set -eu

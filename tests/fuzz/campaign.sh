@@ -1,5 +1,5 @@
 #!/bin/sh
-# A fuzz campaign of one harness of tests/fuzz/ (docs/generator.md, "The campaign"), on
+# A fuzz campaign of one harness of tests/fuzz/ (docs/fuzzing.md, "The campaign"), on
 # demand: builds the harnesses (tests/fuzz/build.sh), then runs HARNESS (fmi, state or
 # plan) under libFuzzer for SECONDS in all, in WORKERS processes (default 1; one per core
 # to spare) sharing one corpus, $OUT/corpus_HARNESS (seeded with tests/fuzz/corpus/HARNESS;

@@ -110,12 +110,12 @@ static void log3_cb(fmi3InstanceEnvironment e, fmi3Status s, fmi3String c, fmi3S
  * harness, for FMI 2 through allocateMemory / freeMemory and for FMI 3 by building
  * fmi3.c with calloc and free renamed to fuzz_calloc and fuzz_free.  ASan maps every such
  * block afresh and unmaps it when it leaves its quarantine: that kernel work was half of
- * the harness's time (docs/generator.md, "Where the FMI harness's time goes").  A pooled
- * block stays poisoned until it is handed out again (an access to it is reported as a use
- * after poison) and is handed out oldest first, zeroed (calloc's promise); only a stale
- * pointer into a block already handed out again goes unseen, which the gcc replay of the
- * corpus in the suite (plain ASan, full quarantine) still catches.  Smaller blocks (FMU
- * states) go straight to ASan. */
+ * the harness's time (docs/fuzzing.md, "The campaign": where the FMI harness's time
+ * went).  A pooled block stays poisoned until it is handed out again (an access to it is
+ * reported as a use after poison) and is handed out oldest first, zeroed (calloc's
+ * promise); only a stale pointer into a block already handed out again goes unseen,
+ * which the gcc replay of the corpus in the suite (plain ASan, full quarantine) still
+ * catches.  Smaller blocks (FMU states) go straight to ASan. */
 #ifdef FUZZ_POOL
 #include <sanitizer/allocator_interface.h>
 #include <sanitizer/asan_interface.h>

@@ -10,7 +10,7 @@
  *  - a plan's pieces are finite and in order, |v| <= v_max, |a| <= max(a_max, d_max) (up
  *    to rounding, as tests/c/test_core.c), the last piece starts at k_end with a = j = 0;
  *  - the plan ends on x0 + the distances, at the end velocity (the tolerance of
- *    docs/generator.md's campaign), done from k_end on;
+ *    docs/fuzzing.md's harnesses), done from k_end on;
  *  - a replan accepted ends at rest, on the target for a target, within 10^-9 of the
  *    positions involved and of a sample's travel at the speeds the move reaches (not at
  *    v_max: issue 21), or within DJL_MIN_MAGNITUDE (a subnormal distance is no move),
