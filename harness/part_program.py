@@ -62,9 +62,6 @@ REQUIRED: tuple[str, ...] = ("x", "z")
 DEFAULTS: dict[str, float | int] = {"v_max": 0.0, "a_max": 0.0, "d_max": 0.0, "dwell": 0.0,
                                     "buffer_mode": BUFFER_MODES["buffered"]}
 """The value of an optional column that is absent, or of an empty cell."""
-UNITS: dict[str, str] = {"x": "m", "z": "m", "v_max": "m/s", "a_max": "m/s2", "d_max": "m/s2",
-                         "dwell": "s", "buffer_mode": ""}
-"""Units of the columns (for the messages and the CSV's comment)."""
 
 CSV_SUFFIXES = (".csv",)
 GCODE_SUFFIXES = (".nc", ".gcode", ".ngc")
@@ -82,7 +79,6 @@ EXAMPLE_FILES: dict[str, str] = {"csv": "pick-place-X.csv", "gcode": "pick-place
 _EXAMPLE_PACKAGE = "harness.programs"
 
 _NONFINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
-_GNUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)")
 _WORD = re.compile(r"([A-Za-z])[ \t]*([+-]?(?:\d+(?:\.\d*)?|\.\d+))")
 _LINE = re.compile(r"[ \t]*(?:[A-Za-z][ \t]*[+-]?(?:\d+(?:\.\d*)?|\.\d+)[ \t]*)*")
 
@@ -278,11 +274,16 @@ class PartProgram(TableMixin):
     z0: float = 0.0
 
     def __post_init__(self) -> None:
-        moves = tuple(self.moves)
+        try:
+            moves = tuple(self.moves)
+        except TypeError:
+            raise PartProgramError(self.source, [f"moves = {_show(self.moves)}: not a sequence "
+                                                 "of ProgramMove"]) from None
         object.__setattr__(self, "moves", moves)
         errors = _start_problems(self.x0, self.z0)
-        object.__setattr__(self, "x0", float(self.x0))
-        object.__setattr__(self, "z0", float(self.z0))
+        if not errors:
+            object.__setattr__(self, "x0", float(self.x0))
+            object.__setattr__(self, "z0", float(self.z0))
         if not moves:
             errors.append("no moves: a program needs at least one")
         for k, m in enumerate(moves):
@@ -428,19 +429,15 @@ def _sniff(lines: Iterable[str]) -> Format:
 
 # ----------------------------------------------------------------- CSV
 
-def _csv_number(text: str) -> tuple[float | None, str | None]:
-    """(value, None) of a CSV number (decimal, optional exponent), or (None, why not)."""
+def _csv_number(text: str) -> float | None:
+    """Read a CSV number (decimal, optional exponent; nan, inf), None if it is none."""
     try:
         v = float(text)
     except ValueError:
-        return None, "not a number"
+        return None
     if "_" in text or not text.isascii():  # float() also reads 1_0 and other digits
-        return None, "not a number"
-    if not math.isfinite(v):
-        if _NONFINITE.fullmatch(text):
-            return None, "must be a finite number"
-        return None, "must be a finite number (it overflows a double)"
-    return v, None
+        return None
+    return v
 
 
 def _parse_csv(lines: list[str]) -> tuple[list[ProgramMove], list[tuple[int, str]]]:
@@ -483,9 +480,11 @@ def _parse_csv(lines: list[str]) -> tuple[list[ProgramMove], list[tuple[int, str
                     bad = True
                 values[name] = mode
                 continue
-            v, problem = _csv_number(cell)
-            if v is not None:
-                problem = _value_problem(name, v)
+            v = _csv_number(cell)
+            problem = "not a number" if v is None else _value_problem(name, v)
+            if problem and v is not None and not math.isfinite(v) and not _NONFINITE.fullmatch(
+                    cell):
+                problem += " (it overflows a double)"
             if problem:
                 errors.append((i, f"line {i}: {name} = {_show(cell)}: {problem}"))
                 bad = True
@@ -511,7 +510,7 @@ def _parse_csv(lines: list[str]) -> tuple[list[ProgramMove], list[tuple[int, str
 
 
 def _header_problems(names: list[str], raw: list[str]) -> list[str]:
-    if all(_csv_number(n)[0] is not None for n in names):
+    if all(_csv_number(n) is not None for n in names):
         return [f"{_show(','.join(raw), 60)} looks like a move: the first line that is not a "
                 "comment names the columns (x,z and any of " + ", ".join(COLUMNS[2:]) + ")"]
     problems = []
@@ -654,7 +653,8 @@ def _gcode_moves(lines: list[str], x0: float, z0: float
     errors: list[tuple[int, str]] = []
     # each move as a dict until its dwell is known (G4 lines after it add to it)
     moves: list[dict[str, Any]] = []
-    st = _GState(x=(Decimal(x0).scaleb(3), x0), z=(Decimal(z0).scaleb(3), z0))
+    # the start as the decimal its float prints as (0.3, not 0.29999999999999998889...)
+    st = _GState(x=(Decimal(repr(x0)).scaleb(3), x0), z=(Decimal(repr(z0)).scaleb(3), z0))
     blend = BUFFER_MODES["blending"]
     buffered = BUFFER_MODES["buffered"]
     for i, raw in enumerate(lines, 1):
@@ -745,7 +745,9 @@ def _gcode_moves(lines: list[str], x0: float, z0: float
                                    "seconds)")
             if motion is not None:
                 st.motion = motion
-            if axes and st.motion is None:
+            if line_errors:
+                pass  # a bad word: its consequences (no mode, no feed) are not reported
+            elif axes and st.motion is None:
                 line_errors.append(f"line {i}: {seen[axes[0]]}: no motion mode yet: G0 or G1 "
                                    "first")
             elif axes and st.motion == 1 and st.feed is None:
@@ -772,13 +774,14 @@ def _gcode_moves(lines: list[str], x0: float, z0: float
                               "buffer_mode": buffered, "dwell": _ZERO})
                 st.last_g = 0
             moves[-1]["dwell"] += dwell
+            moves[-1]["stop"] = True  # a G4, even P0, is an exact stop
         elif axes:
             st.x = target.get("X", st.x)
             st.z = target.get("Z", st.z)
             g1 = st.motion == 1
             mode = buffered
             if (g1 and st.blending and st.last_g == 1 and moves
-                    and moves[-1]["dwell"] == 0):
+                    and not moves[-1].get("stop")):
                 mode = blend
             v_max = st.v_max if g1 else 0.0
             moves.append({"line": i, "x": st.x[1], "z": st.z[1], "v_max": v_max,
@@ -789,6 +792,7 @@ def _gcode_moves(lines: list[str], x0: float, z0: float
     out: list[ProgramMove] = []
     if not errors:
         for m in moves:
+            m.pop("stop", None)
             out.append(_checked_move(**{**DEFAULTS, **m, "dwell": float(m["dwell"])}))
         if not out:
             errors.append((0, "no moves (a G0 or G1 with X or Z): a program needs at least one"))
