@@ -9,6 +9,7 @@ built-in base its callers already catch (``ValueError`` for bad input,
 error                       built-in base   raised by
 ==========================  ==============  ============================================
 ``ScenarioError``           ValueError      :mod:`harness.scenario` (file, key, value)
+``PartProgramError``        ValueError      :mod:`harness.part_program` (every bad line)
 ``FMUError``                RuntimeError    :mod:`harness.fmu.runner` (an FMI call)
 ``BuildError``              RuntimeError    :mod:`harness.fmu.build` (compiler, sources)
 ``PlanError``               ValueError      :mod:`harness.simulation.fast_axis`

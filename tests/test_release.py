@@ -130,6 +130,8 @@ def test_wheel_holds_the_engine_and_the_prebuilt_fmus(wheel, staged):
     if sys.version_info >= (3, 11):
         assert "-abi3-" in wheel.name and engines[0] == "harness/_engine.abi3.so"
     assert "harness/_engine.c" not in names
+    assert {"harness/programs/pick-place-X.csv", "harness/programs/pick-place-X.nc",
+            "harness/scenarios/X.toml"} <= set(names)  # the embedded data files
     with zipfile.ZipFile(wheel) as z:
         for v in (2, 3):
             name = f"harness/_data/prebuilt/{release.prebuilt_name(v)}"
