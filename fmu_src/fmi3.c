@@ -337,8 +337,9 @@ fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference valueR
     return access(instance, "fmi3SetBoolean", 1, 'B', valueReferences, nValueReferences, io, nValues);
 }
 
-/* Enumerations (profile, short_stage) are Int64 in FMI 3's API; Int32 is accepted too, as
- * before the variables were declared as enumerations. */
+/* Enumerations (spec.ENUMERATIONS: profile, short_stage, jerk_source, shaper, shaper_source,
+ * and the inputs cmd_profile, cmd_shaper, buffer_mode) are Int64 in FMI 3's API; Int32 is
+ * accepted too, as before the variables were declared as enumerations. */
 fmi3Status fmi3GetInt64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                         size_t nValueReferences, fmi3Int64 values[], size_t nValues)
 {
