@@ -52,10 +52,11 @@ const char *model_state_name(int state);
 /* the data of an instance                                                  */
 
 #define MODEL_MAGIC 0x4a4c4446u /* "FDLJ" */
-#define MODEL_LAYOUT 10u         /* of model_data: a state of another layout is refused (8: the
+#define MODEL_LAYOUT 11u         /* of model_data: a state of another layout is refused (8: the
                                     replayed table, djl_table, and 264 plan steps; 9: the
                                     per-command values and command errors, issue 34; 10: the
-                                    queue of buffered and blending commands, min_duration) */
+                                    queue of buffered and blending commands, min_duration; 11:
+                                    the checksum with rotated lanes, issue 39) */
 /* Commands a buffered or blending execute can wait behind (spec.QUEUE_CAPACITY). */
 #define MODEL_QUEUE_CAPACITY 16
 

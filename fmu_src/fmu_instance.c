@@ -123,17 +123,22 @@ static uint32_t read_u32(const void *state, size_t at)
 
 size_t model_state_stored_size(const void *state) { return read_u32(state, offsetof(model_data, size)); }
 
-/* 64-bit FNV-1a over the 8-byte words of a packed state but the checksum itself (the
- * padding of model_data included: it is zeroed before use and copied whole), in four
- * lanes: word k goes to lane k % 4 (the words past the last whole group of four to lane
- * 0), and the lanes are folded into one by the same step.  Each step (h ^ w) * prime is
- * a bijection of h and of w, and a word reaches one lane only, so a change of any one
- * word always changes the checksum.  Four lanes, not one: a step waits for the one
- * before it in its lane (a multiply); one lane took 4.0 us for a 30 kB state at -O2,
- * four take 1.2 us, and a save + restore checksums twice (layout 7; 6 had one lane).
- * Any alignment. */
-#define FNV_BASIS 0xcbf29ce484222325u
-#define FNV_PRIME 0x100000001b3u
+/* The checksum of a packed state: its 8-byte words but the checksum itself (the padding
+ * of model_data included: it is zeroed before use and copied whole), in eight lanes (word
+ * k to lane k % 8), each lane a chain of steps
+ *     h <- rotl((h ^ w) * P, 29),   P the 64-bit FNV prime,
+ * the lanes folded into one by the same step, and the result avalanched (xxHash64's
+ * finaliser).  Each step is a bijection of h and of w (xor, an odd multiply, a rotation),
+ * and a word reaches one lane only, so a change of any one word always changes the
+ * checksum.  The rotation is what FNV-1a alone lacked (issue 39, finding C): with
+ * h <- (h ^ w) * P a flipped bit 63 stays bit 63 through every step (2^63 P = 2^63 mod
+ * 2^64), so two such flips cancelled; rotated down to bit 28, it is spread by the next
+ * multiply.  Eight lanes, not four: the rotation lengthens each lane's chain, eight keep
+ * the multiplier busy (layout 11; 7 to 10 had four FNV-1a lanes, 6 one).  Any alignment. */
+#define SUM_BASIS 0xcbf29ce484222325u
+#define SUM_PRIME 0x100000001b3u
+#define SUM_STEP(h, w) ((h) = rotl64(((h) ^ (w)) * SUM_PRIME))
+static uint64_t rotl64(uint64_t x) { return (x << 29) | (x >> 35); }
 /* the word at byte i of a state, the checksum's own read as 0 */
 static uint64_t state_word(const unsigned char *b, size_t i)
 {
@@ -145,19 +150,48 @@ static uint64_t state_word(const unsigned char *b, size_t i)
 uint64_t model_state_checksum(const void *state, size_t size)
 {
     const unsigned char *b = (const unsigned char *)state;
-    uint64_t h0 = FNV_BASIS, h1 = FNV_BASIS, h2 = FNV_BASIS, h3 = FNV_BASIS;
+    uint64_t h0 = SUM_BASIS, h1 = SUM_BASIS + 1, h2 = SUM_BASIS + 2, h3 = SUM_BASIS + 3;
+    uint64_t h4 = SUM_BASIS + 4, h5 = SUM_BASIS + 5, h6 = SUM_BASIS + 6, h7 = SUM_BASIS + 7;
+    uint64_t h;
     size_t i;
-    for (i = 0; i + 32 <= size; i += 32) {
-        h0 = (h0 ^ state_word(b, i)) * FNV_PRIME;
-        h1 = (h1 ^ state_word(b, i + 8)) * FNV_PRIME;
-        h2 = (h2 ^ state_word(b, i + 16)) * FNV_PRIME;
-        h3 = (h3 ^ state_word(b, i + 24)) * FNV_PRIME;
+    for (i = 0; i + 64 <= size; i += 64) {
+        if (i >= 64) break; /* the first group holds the checksum's own word: read as 0 */
+        SUM_STEP(h0, state_word(b, i));
+        SUM_STEP(h1, state_word(b, i + 8));
+        SUM_STEP(h2, state_word(b, i + 16));
+        SUM_STEP(h3, state_word(b, i + 24));
+        SUM_STEP(h4, state_word(b, i + 32));
+        SUM_STEP(h5, state_word(b, i + 40));
+        SUM_STEP(h6, state_word(b, i + 48));
+        SUM_STEP(h7, state_word(b, i + 56));
     }
-    for (; i + 8 <= size; i += 8) h0 = (h0 ^ state_word(b, i)) * FNV_PRIME;
-    h0 = (FNV_BASIS ^ h0) * FNV_PRIME; /* the lanes folded */
-    h0 = (h0 ^ h1) * FNV_PRIME;
-    h0 = (h0 ^ h2) * FNV_PRIME;
-    return (h0 ^ h3) * FNV_PRIME;
+    for (; i + 64 <= size; i += 64) { /* the other groups: plain words */
+        uint64_t w[8];
+        memcpy(w, b + i, 64);
+        SUM_STEP(h0, w[0]);
+        SUM_STEP(h1, w[1]);
+        SUM_STEP(h2, w[2]);
+        SUM_STEP(h3, w[3]);
+        SUM_STEP(h4, w[4]);
+        SUM_STEP(h5, w[5]);
+        SUM_STEP(h6, w[6]);
+        SUM_STEP(h7, w[7]);
+    }
+    for (; i + 8 <= size; i += 8) SUM_STEP(h0, state_word(b, i));
+    h = SUM_BASIS ^ (uint64_t)size; /* the lanes folded, the size with them */
+    SUM_STEP(h, h0);
+    SUM_STEP(h, h1);
+    SUM_STEP(h, h2);
+    SUM_STEP(h, h3);
+    SUM_STEP(h, h4);
+    SUM_STEP(h, h5);
+    SUM_STEP(h, h6);
+    SUM_STEP(h, h7);
+    h ^= h >> 33; /* avalanche */
+    h *= 0xc2b2ae3d27d4eb4fu;
+    h ^= h >> 29;
+    h *= 0x165667b19e3779f9u;
+    return h ^ (h >> 32);
 }
 
 void model_state_seal(void *state, size_t size)
@@ -213,9 +247,13 @@ static model_status verify(model_instance *m, const char *fn, const unsigned cha
         return model_refuse(m, "%s: FMU state of %lu bytes, too short for a state of this FMU "
                             "(at least %lu: made by another version of the FMU?)", fn,
                             (unsigned long)size, (unsigned long)PACK_HEAD);
-    if (read_u32(b, offsetof(model_data, magic)) != MODEL_MAGIC ||
-        read_u32(b, offsetof(model_data, layout)) != MODEL_LAYOUT)
+    if (read_u32(b, offsetof(model_data, magic)) != MODEL_MAGIC)
         return model_refuse(m, "%s: not a state of this FMU (bad header)", fn);
+    if (read_u32(b, offsetof(model_data, layout)) != MODEL_LAYOUT)
+        return model_refuse(m, "%s: a state of layout %lu, this FMU reads layout %lu (bad "
+                            "header: made by another version of the FMU)", fn,
+                            (unsigned long)read_u32(b, offsetof(model_data, layout)),
+                            (unsigned long)MODEL_LAYOUT);
     stated = read_u32(b, offsetof(model_data, size));
     if (stated != size)
         return model_refuse(m, "%s: FMU state of %lu bytes, its header says %lu (truncated or "

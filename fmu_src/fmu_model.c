@@ -1999,5 +1999,11 @@ const char *model_state_flaw(const model_data *d)
     }
     if (cur != d->cursor || !same_sample(&o, &d->out))
         return "its outputs are not those of its plan at its time";
+    {
+        /* and finite (issue 39, finding F: a phase entry forged to -DBL_MAX, finite and in
+         * order, gave x = NaN, equal to itself as memcmp compares it) */
+        const double out7[7] = {o.x, o.v, o.a, o.j, o.x_al, o.v_al, o.a_al};
+        if (!finite_all(out7, 7)) return "its outputs are not finite";
+    }
     return NULL;
 }

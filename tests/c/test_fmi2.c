@@ -623,25 +623,38 @@ static void run_state_packing(void)
         CHECK(sum != model_state_checksum(b, model_state_size(&d)), "entries sealed");
         b[head + 8] ^= 1;
     }
-    /* the checksum as docs/generator.md states it (FNV-1a in four lanes, word k in lane
-     * k % 4 but the words past the last group of four in lane 0, the checksum's own word
-     * read as 0, the lanes folded by the same step), and any one word changed changes it */
+    /* the checksum as docs/generator.md states it (issue 39: eight lanes, word k in lane
+     * k % 8 but the words past the last group of eight in lane 0, each step
+     * h = rotl((h ^ w) P, 29), the checksum's own word read as 0, lane j starting at the
+     * basis + j, the lanes folded by the same step from the basis ^ size, then xxHash64's
+     * avalanche), and any one word changed changes it */
     {
-        size_t n = model_state_size(&d) / 8, j, whole = n / 4 * 4;
+        size_t n = model_state_size(&d) / 8, j, whole = n / 8 * 8;
         size_t own = offsetof(model_data, checksum) / 8;
-        uint64_t lane[4], ref = 0xcbf29ce484222325u, w, sum, x = 0x9e3779b97f4a7c15u;
+        uint64_t lane[8], ref, w, sum, x = 0x9e3779b97f4a7c15u;
         int changed = 0;
-        CHECK(n % 4 != 0, "a state whose words fill no whole group of four (%lu)",
+        CHECK(n % 8 != 0, "a state whose words fill no whole group of eight (%lu)",
               (unsigned long)n);
-        for (j = 0; j < 4; j++) lane[j] = 0xcbf29ce484222325u;
+        for (j = 0; j < 8; j++) lane[j] = 0xcbf29ce484222325u + j;
         for (j = 0; j < n; j++) {
+            uint64_t *h = &lane[j < whole ? j % 8 : 0];
             memcpy(&w, b + 8 * j, 8);
             if (j == own) w = 0;
-            lane[j < whole ? j % 4 : 0] = (lane[j < whole ? j % 4 : 0] ^ w) * 0x100000001b3u;
+            *h = (*h ^ w) * 0x100000001b3u;
+            *h = (*h << 29) | (*h >> 35);
         }
-        for (j = 0; j < 4; j++) ref = (ref ^ lane[j]) * 0x100000001b3u;
+        ref = 0xcbf29ce484222325u ^ (uint64_t)(8 * n);
+        for (j = 0; j < 8; j++) {
+            ref = (ref ^ lane[j]) * 0x100000001b3u;
+            ref = (ref << 29) | (ref >> 35);
+        }
+        ref ^= ref >> 33;
+        ref *= 0xc2b2ae3d27d4eb4fu;
+        ref ^= ref >> 29;
+        ref *= 0x165667b19e3779f9u;
+        ref ^= ref >> 32;
         memcpy(&sum, b + offsetof(model_data, checksum), 8);
-        CHECK(sum == ref, "checksum %llx, four-lane FNV-1a %llx", (unsigned long long)sum,
+        CHECK(sum == ref, "checksum %llx, eight rotated lanes %llx", (unsigned long long)sum,
               (unsigned long long)ref);
         for (j = 0; j < n; j++) {
             if (j == own) continue;
@@ -972,6 +985,27 @@ static void run_forged_memory(void)
     FORGE(d.mem.phase[0].rate = 0.0, "phase of f_mode is not finite or its rate");
     FORGE(d.mem.phase[0].rate = 1e-300, "phase of f_mode is not finite or its rate");
     FORGE(d.mem.phase[0].rate = 2.5, "phase of f_mode is not finite or its rate");
+    /* issue 39, finding F: the oldest phase entry forged to -DBL_MAX (finite, in order), the
+     * outputs re-evaluated from it (NaN) and the state resealed, as a coherent forger
+     * would: the outputs equal those of the plan (NaN == NaN to memcmp) but are not finite */
+    {
+        int32_t cur, cs[DJL_MAX_SHAPER_IMPULSES];
+        model_state_unpack(buf, &d);
+        d.mem.phase[d.mem.phase_first].P = -DBL_MAX;
+        cur = d.cursor;
+        memcpy(cs, d.shaper_cursor, sizeof cs);
+        djl_shaper_eval(&d.shaper, &d.plan, (double)d.n - d.offset + d.phase, d.offset, &d.mem,
+                        0, &cur, cs, &d.out);
+        d.cursor = cur;
+        memcpy(d.shaper_cursor, cs, sizeof cs);
+        CHECK(!isfinite(d.out.x) || !isfinite(d.out.v) || !isfinite(d.out.a),
+              "the forgery of finding F gives outputs x %g, v %g, a %g", d.out.x, d.out.v,
+              d.out.a);
+        model_state_pack(&d, forged);
+        expect_error(fmi2DeSerializeFMUstate(c, forged, model_state_size(&d), &s2),
+                     "its outputs are not finite");
+        expect_error(fmi2SetFMUstate(c, forged), "its outputs are not finite");
+    }
     /* issue 21, fourth session (fuzz_state): f_mode itself, the input the shaper is timed
      * by, beyond what a set accepts (f_mode = DBL_MIN froze the outputs, then a change of
      * f_mode gave NaN after OK steps); at the bounds a set accepts, the state is accepted */
@@ -1390,6 +1424,98 @@ static void run_issue21_long_stops(void)
         fmi2FreeFMUstate(c, &s2);
         fmi2FreeInstance(c);
     }
+}
+
+/* Issue 39, finding C: damage the checksum must see.  A state mid-motion (a ZVD shaper
+ * timed by f_mode after a commanded target: both rings in use), then
+ *  - every single-bit flip of 512 words spread over the state,
+ *  - every pair of flips among bits 56..63 of 64 words (the top bytes: FNV-1a without a
+ *    rotation let two flipped bit 63 cancel),
+ *  - the finding's own: the sign bits of the target and of an unused 0.0 flipped,
+ *  - n_random random damages of 2 to 8 words (a random word, bits or bytes changed),
+ * each compared with the seal (model_state_checksum against the stored sum; the finding's
+ * also through fmi2DeSerializeFMUstate): none may be accepted. */
+static void run_checksum_damage(long n_random)
+{
+    fmi2Component c = make("checksum");
+    fmi2FMUstate s = NULL, s2 = NULL;
+    fmi2Byte *buf, *work;
+    size_t size = 0, n_words, w, k, i, j;
+    uint64_t stored;
+    long accepted = 0, tried = 0, it;
+    double t = 0.0;
+    set_int(c, VR_SHAPER, SHAPER_ZVD);
+    set_real(c, VR_F_SHAPER, 7.0);
+    set_int(c, VR_SHAPER_SOURCE, SHAPER_SOURCE_F_MODE);
+    CHECK(fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) == fmi2OK,
+          "init: %s", last_message);
+    for (k = 0; k < 120; k++, t += 1e-3) fmi2DoStep(c, t, 1e-3, fmi2True);
+    set_real(c, VR_F_MODE, 12.0);
+    set_real(c, VR_TARGET, 0.3);
+    set_bool(c, VR_EXECUTE, 1);
+    for (k = 0; k < 30; k++, t += 1e-3) fmi2DoStep(c, t, 1e-3, fmi2True);
+    CHECK(fmi2GetFMUstate(c, &s) == fmi2OK && fmi2SerializedFMUstateSize(c, s, &size) == fmi2OK,
+          "state: %s", last_message);
+    buf = (fmi2Byte *)malloc(size);
+    work = (fmi2Byte *)malloc(size);
+    CHECK(buf && work && fmi2SerializeFMUstate(c, s, buf, size) == fmi2OK, "serialise");
+    memcpy(&stored, buf + offsetof(model_data, checksum), 8);
+    CHECK(stored == model_state_checksum(buf, size), "the seal");
+    n_words = size / 8;
+#define DAMAGE_SEEN() (memcpy(&stored, work + offsetof(model_data, checksum), 8), \
+                       tried++, accepted += stored == model_state_checksum(work, size))
+    for (i = 0; i < 512; i++) { /* every single-bit flip of 512 words */
+        w = (i * n_words) / 512;
+        if (w * 8 == offsetof(model_data, checksum)) continue;
+        for (k = 0; k < 64; k++) {
+            memcpy(work, buf, size);
+            work[w * 8 + k / 8] ^= (fmi2Byte)(1u << (k % 8));
+            DAMAGE_SEEN();
+        }
+    }
+    for (i = 0; i < 64 * 8; i++) /* every pair of flips in bits 56..63 of 64 words */
+        for (j = i + 1; j < 64 * 8; j++) {
+            size_t wi = ((i / 8) * n_words) / 64, wj = ((j / 8) * n_words) / 64;
+            if (wi * 8 == offsetof(model_data, checksum) ||
+                wj * 8 == offsetof(model_data, checksum))
+                continue;
+            memcpy(work, buf, size);
+            work[wi * 8 + 7] ^= (fmi2Byte)(1u << (i % 8)); /* little-endian: byte 7 holds */
+            work[wj * 8 + 7] ^= (fmi2Byte)(1u << (j % 8)); /* bits 56..63 */
+            DAMAGE_SEEN();
+        }
+    for (it = 0; it < n_random; it++) { /* random damage of 2 to 8 words */
+        int n = 2 + (int)(next_rand() % 7), q;
+        memcpy(work, buf, size);
+        for (q = 0; q < n; q++) {
+            size_t at = (size_t)(next_rand() % n_words) * 8;
+            uint64_t x;
+            if (at == offsetof(model_data, checksum)) at += 8;
+            memcpy(&x, work + at, 8);
+            x ^= next_rand() % 2 ? (uint64_t)1 << (next_rand() % 64) : next_rand() | 1u;
+            memcpy(work + at, &x, 8);
+        }
+        if (memcmp(work, buf, size) != 0) DAMAGE_SEEN();
+    }
+#undef DAMAGE_SEEN
+    CHECK(accepted == 0, "%ld of %ld damaged states pass the checksum", accepted, tried);
+    printf("fmi2 checksum: %ld damaged states (single bits of 512 words, pairs of top-byte bits "
+           "of 64 words, %ld random damages of 2-8 words): %ld accepted\n", tried, n_random,
+           accepted);
+    { /* the finding: target 0.3 -> -0.3 and an unused 0.0 -> -0.0 */
+        static model_data d;
+        size_t at_t = offsetof(model_data, target) + 7, at_z = offsetof(model_data, cmd) + 7;
+        model_state_unpack(buf, &d);
+        CHECK(d.target == 0.3 && d.cmd.v_max == 0.0, "the finding's two doubles");
+        memcpy(work, buf, size);
+        work[at_t] ^= 0x80;
+        work[at_z] ^= 0x80;
+        expect_error(fmi2DeSerializeFMUstate(c, work, size, &s2), "checksum mismatch");
+    }
+    free(buf);
+    free(work);
+    fmi2FreeFMUstate(c, &s);
+    fmi2FreeInstance(c);
 }
 
 /* Issue 34: a state holding a queue (a blending and two buffered commands waiting behind a
@@ -1877,6 +2003,9 @@ int main(int argc, char **argv)
      * issue #10: ./test_fmi2 1000000), argv[2]: resealed ones (default a tenth) */
     long n_fuzz = argc > 1 ? atol(argv[1]) : 100000;
     long n_sealed = argc > 2 ? atol(argv[2]) : n_fuzz / 10;
+    /* argv[3]: random multi-word damages the checksum must see (issue 39: 10^6 on demand) */
+    long n_damage = argc > 3 ? atol(argv[3]) : 20000;
+    run_checksum_damage(n_damage);
     run_states();
     run_bad_inputs();
     run_range_refusals();
